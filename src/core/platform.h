@@ -1,0 +1,27 @@
+// Macros that let one function body compile for the CPU and, under nvcc, for the GPU.
+// Everything that runs per sample (BSDFs, light and camera sampling, volume integration) is NPT_HD.
+#pragma once
+
+#if defined(__CUDACC__)
+#define NPT_HD __host__ __device__
+#define NPT_INLINE __forceinline__
+#else
+#define NPT_HD
+#define NPT_INLINE inline __attribute__((always_inline))
+#endif
+
+#include <cstddef>
+#include <cstdint>
+
+namespace npt {
+
+// A non-owning view of device- or host-resident memory: the only container shared code may touch.
+template <typename T>
+struct Span {
+    T* data = nullptr;
+    size_t size = 0;
+    NPT_HD NPT_INLINE T& operator[](size_t i) const { return data[i]; }
+    NPT_HD NPT_INLINE bool empty() const { return size == 0; }
+};
+
+}  // namespace npt
