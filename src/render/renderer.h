@@ -24,6 +24,7 @@ struct RenderOptions {
 constexpr int k_max_resolution = 32768;
 constexpr int k_max_spp = 1 << 20;
 constexpr int k_max_depth = 1024;
+constexpr long long k_max_pixels = 1LL << 27;  // 134 M pixels: 1.6 GB of float RGB
 
 // Called from worker threads (serialised by the renderer) with the number of pixel-samples done so far.
 using ProgressFn = std::function<void(uint64_t done, uint64_t total)>;

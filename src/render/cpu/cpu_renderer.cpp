@@ -1,0 +1,75 @@
+#include "render/cpu/cpu_renderer.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/blocked_range2d.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <mutex>
+
+#include "render/camera.h"
+#include "render/cpu/embree_scene.h"
+#include "render/path_integrator.h"
+#include "render/scene_data.h"
+
+namespace npt::render::cpu {
+
+namespace {
+constexpr int k_tile = 16;
+}
+
+Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const ProgressFn& progress) {
+    const int width = options.width, height = options.height, spp = options.spp;
+    SceneData data(scene, width, height);
+    EmbreeScene embree(scene);
+    EmbreeTracer tracer(embree);
+    const SceneView& sv = data.view();
+    PathSettings ps;
+    ps.max_depth = options.max_depth;
+
+    Image image(width, height, 3);
+    const uint64_t total = uint64_t(width) * uint64_t(height) * uint64_t(spp);
+    std::atomic<uint64_t> done{0};
+    std::atomic<uint64_t> dropped{0};
+    std::mutex progress_mutex;
+
+    auto render_tile = [&](const tbb::blocked_range2d<int>& r) {
+        for (int y = r.rows().begin(); y < r.rows().end(); ++y)
+            for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
+                Pcg32 rng = Pcg32::for_pixel(options.seed, uint32_t(x), uint32_t(y), 0);
+                Rgb sum(0.0f);
+                for (int s = 0; s < spp; ++s) {
+                    Ray ray = generate_camera_ray(sv.camera, x, y, rng.next_2d());
+                    Rgb l = trace_path(sv, tracer, ray, rng, ps);
+                    if (is_finite(l)) {
+                        sum += l;
+                    } else {
+                        dropped.fetch_add(1, std::memory_order_relaxed);
+                    }
+                }
+                float* px = image.at(x, y);
+                px[0] = sum.x / float(spp);
+                px[1] = sum.y / float(spp);
+                px[2] = sum.z / float(spp);
+            }
+        uint64_t n = uint64_t(r.rows().size()) * uint64_t(r.cols().size()) * uint64_t(spp);
+        uint64_t now = done.fetch_add(n) + n;
+        if (progress) {
+            std::lock_guard<std::mutex> lock(progress_mutex);
+            progress(now, total);
+        }
+    };
+
+    int threads = options.threads > 0 ? options.threads : tbb::this_task_arena::max_concurrency();
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range2d<int>(0, height, k_tile, 0, width, k_tile), render_tile,
+                          tbb::simple_partitioner());
+    });
+    if (dropped > 0) spdlog::warn("render: {} samples were NaN or infinite and were dropped", dropped.load());
+    return image;
+}
+
+}  // namespace npt::render::cpu

@@ -1,0 +1,82 @@
+// The CPU backend's ray queries: one Embree 3 triangle geometry per scene mesh (geomID = mesh index), committed
+// once; EmbreeTracer answers the integrator's two questions (first hit, segment blocked) for one ray at a time.
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include "render/surface.h"
+#include "scene/scene.h"
+
+namespace npt::render::cpu {
+
+class EmbreeScene {
+public:
+    explicit EmbreeScene(const scene::Scene& scene);
+    ~EmbreeScene();
+    EmbreeScene(const EmbreeScene&) = delete;
+    EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+    RTCScene handle() const { return m_scene; }
+
+private:
+    RTCDevice m_device = nullptr;
+    RTCScene m_scene = nullptr;
+};
+
+class EmbreeTracer {
+public:
+    explicit EmbreeTracer(const EmbreeScene& scene) : m_scene(scene.handle()) {}
+
+    bool intersect(const Ray& ray, float tmax, Hit* hit) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRayHit rh;
+        rh.ray.org_x = ray.o.x;
+        rh.ray.org_y = ray.o.y;
+        rh.ray.org_z = ray.o.z;
+        rh.ray.dir_x = ray.d.x;
+        rh.ray.dir_y = ray.d.y;
+        rh.ray.dir_z = ray.d.z;
+        rh.ray.tnear = 0.0f;
+        rh.ray.tfar = tmax;
+        rh.ray.time = 0.0f;
+        rh.ray.mask = 0xFFFFFFFFu;
+        rh.ray.id = 0;
+        rh.ray.flags = 0;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(m_scene, &ctx, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+        hit->t = rh.ray.tfar;
+        hit->mesh = rh.hit.geomID;
+        hit->prim = rh.hit.primID;
+        hit->u = rh.hit.u;
+        hit->v = rh.hit.v;
+        return true;
+    }
+
+    bool occluded(const Ray& ray, float tmax) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRay r;
+        r.org_x = ray.o.x;
+        r.org_y = ray.o.y;
+        r.org_z = ray.o.z;
+        r.dir_x = ray.d.x;
+        r.dir_y = ray.d.y;
+        r.dir_z = ray.d.z;
+        r.tnear = 0.0f;
+        r.tfar = tmax;
+        r.time = 0.0f;
+        r.mask = 0xFFFFFFFFu;
+        r.id = 0;
+        r.flags = 0;
+        rtcOccluded1(m_scene, &ctx, &r);
+        return r.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
+    }
+
+private:
+    RTCScene m_scene;
+};
+
+}  // namespace npt::render::cpu

@@ -1,0 +1,30 @@
+// Host-side owner of everything a SceneView points into: mesh views over the loaded scene's arrays, material
+// and texture views, the light set and the camera. The scene::Scene must outlive it.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "lights/light_set.h"
+#include "render/scene_view.h"
+#include "scene/scene.h"
+
+namespace npt::render {
+
+class SceneData {
+public:
+    SceneData(const scene::Scene& scene, int width, int height);
+    const SceneView& view() const { return m_view; }
+
+private:
+    std::vector<MeshView> m_meshes;
+    std::vector<MaterialView> m_materials;
+    std::vector<TextureView> m_textures;
+    std::unique_ptr<lights::LightSet> m_lights;
+    SceneView m_view;
+};
+
+// The camera the scene selected, or a default view of the whole scene when it has none.
+CameraView make_camera_view(const scene::Scene& scene, int width, int height);
+
+}  // namespace npt::render
