@@ -25,20 +25,20 @@ struct Texture {
 struct Material {
     std::string name;
     Rgb base_color{1.0f};
-    int base_color_texture = -1;  // sRGB-decoded at load
+    int base_color_texture = -1;     // sRGB-decoded at load
     float metallic = 1.0f;
     float roughness = 1.0f;
     int metallic_roughness_texture = -1;  // G = roughness, B = metallic (glTF)
     int normal_texture = -1;
     float normal_scale = 1.0f;
-    Rgb emission{0.0f};         // emissiveFactor x KHR_materials_emissive_strength
-    int emissive_texture = -1;  // sRGB-decoded at load
-    float specular = 1.0f;      // KHR_materials_specular specularFactor; 0 means pure Lambert
-    Rgb specular_color{1.0f};   // KHR_materials_specular specularColorFactor
-    float transmission = 0.0f;  // KHR_materials_transmission
-    float ior = 1.5f;           // KHR_materials_ior
+    Rgb emission{0.0f};              // emissiveFactor x KHR_materials_emissive_strength
+    int emissive_texture = -1;       // sRGB-decoded at load
+    float specular = 1.0f;           // KHR_materials_specular specularFactor; 0 means pure Lambert
+    Rgb specular_color{1.0f};        // KHR_materials_specular specularColorFactor
+    float transmission = 0.0f;       // KHR_materials_transmission
+    float ior = 1.5f;                // KHR_materials_ior
     bool double_sided = false;
-    bool is_volume = false;  // named "volume": a NeRF placeholder, never drawn as a surface
+    bool is_volume = false;          // named "volume": a NeRF placeholder, never drawn as a surface
 };
 
 // A triangle mesh in world space. normals/uvs are either empty or one per position.
@@ -54,8 +54,7 @@ struct Mesh {
 
 enum class PunctualType { Point, Spot, Directional };
 
-// KHR_lights_punctual: intensity in candela (point/spot) or lux (directional), already multiplied into
-// `intensity`.
+// KHR_lights_punctual: intensity in candela (point/spot) or lux (directional), already multiplied into `intensity`.
 struct PunctualLight {
     std::string name;
     PunctualType type = PunctualType::Point;
@@ -67,8 +66,7 @@ struct PunctualLight {
 };
 
 // Light arriving from infinity: a constant colour, or an equirectangular map times a strength.
-// Direction convention of the map: see docs/formats.md (+Y up; u = 0.5 + atan2(d.x, -d.z) / 2pi, v =
-// acos(d.y) / pi).
+// Direction convention of the map: see docs/formats.md (+Y up; u = 0.5 + atan2(d.x, -d.z) / 2pi, v = acos(d.y) / pi).
 struct Environment {
     Rgb color{0.0f};
     int texture = -1;
@@ -87,10 +85,10 @@ struct Camera {
 
 // A cube whose material is named `volume`: where a NeRF or grid volume sits. Not rendered as a surface.
 struct VolumeInstance {
-    std::string name;                        // node name
-    Mat4 local_to_world;                     // maps the cube's local box onto the world
+    std::string name;        // node name
+    Mat4 local_to_world;     // maps the cube's local box onto the world
     Vec3 local_min{-1.0f}, local_max{1.0f};  // the cube mesh's own bounds in local space
-    std::string extras_json;                 // the node's `extras` (the volume's file, scales); empty if none
+    std::string extras_json; // the node's `extras` (the volume's file, scales); empty if none
 };
 
 // Render settings a scene file may carry; the command line overrides them.
