@@ -86,15 +86,15 @@ View checked_view(const Context& ctx, int index, const std::string& what, int ex
     if (stride < elem)
         throw Error(name + ": byteStride " + std::to_string(stride) + " of " + view_name +
                     " is smaller than the element size " + std::to_string(elem));
-    // count <= byteLength bounds count before the product below, so it cannot overflow 64 bits.
-    if (a.count > bv.byteLength || a.byteOffset > bv.byteLength || (a.count > 1 && stride > bv.byteLength) ||
-        a.byteOffset + stride * (a.count - 1) + elem > bv.byteLength) {
-        const unsigned long long need = (a.count > bv.byteLength || stride > bv.byteLength)
-                                            ? 0ULL
-                                            : a.byteOffset + stride * (a.count - 1) + elem;
-        throw Error(name + ": " + std::to_string(a.count) + " elements" +
-                    (need ? " need " + std::to_string(need) + " bytes" : std::string(" cannot fit")) +
-                    " but " + view_name + " has " + std::to_string(bv.byteLength));
+    // 128-bit arithmetic: a count of 10^12 (or 2^64 - 1) cannot overflow, and fails here before any
+    // allocation.
+    using u128 = unsigned __int128;
+    const u128 need = u128(a.byteOffset) + u128(stride) * u128(a.count - 1) + u128(elem);
+    if (need > u128(bv.byteLength)) {
+        const std::string need_text = need > u128(UINT64_MAX) ? std::string("more than 2^64")
+                                                              : std::to_string((unsigned long long)need);
+        throw Error(name + ": " + std::to_string(a.count) + " elements need " + need_text + " bytes but " +
+                    view_name + " has " + std::to_string(bv.byteLength));
     }
     const unsigned char* base = m.buffers[size_t(bv.buffer)].data.data() + bv.byteOffset + a.byteOffset;
     return View{base, a.count, stride, a.componentType, a.normalized};
