@@ -94,7 +94,7 @@ class Flattener {
             throw Error(m_ctx.file + ": node " + std::to_string(index) +
                         " is its own ancestor (cycle in children)");
         const auto& n = model.nodes[size_t(index)];
-        const std::string label = n.name.empty() ? "node " + std::to_string(index) : n.name;
+        const std::string label = n.name.empty() ? fmt::format("#{}", index) : n.name;
         const Mat4 world = parent * local_transform(n, m_ctx.file + ": node '" + label + "'");
         if (!world.is_finite()) throw Error(m_ctx.file + ": node '" + label + "': transform is not finite");
         if (n.mesh >= 0) mesh(n, index, label, world);
@@ -154,7 +154,9 @@ class Flattener {
             if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
                 throw Error(where + ": TEXCOORD_0 has " + std::to_string(mesh.uvs.size()) +
                             " elements, POSITION " + std::to_string(mesh.positions.size()));
-            validate_mesh(mesh, where + " accessor " + std::to_string(pos_it->second));
+            validate_mesh(
+                mesh, where + ", POSITION accessor " + std::to_string(pos_it->second) +
+                          (prim.indices >= 0 ? ", indices accessor " + std::to_string(prim.indices) : ""));
             if (mesh.indices.empty()) continue;
 
             mesh.material = m_materials.material(prim.material);
