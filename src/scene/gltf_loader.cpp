@@ -56,8 +56,18 @@ tinygltf::Model parse(const fs::path& path) {
     } catch (const std::exception& e) {
         throw Error(file + ": " + e.what());
     }
-    // Missing external images are only a warning in tinygltf; we report them per material instead.
-    if (!warn.empty()) spdlog::debug("{}: tinygltf: {}", file, one_line(warn));
+    // Missing external images are only a warning in tinygltf; we report them per material (as errors)
+    // instead, so those lines are dropped here and the rest is passed on as one line.
+    std::string kept;
+    for (size_t pos = 0; pos < warn.size();) {
+        size_t end = warn.find('\n', pos);
+        if (end == std::string::npos) end = warn.size();
+        const std::string line = warn.substr(pos, end - pos);
+        if (!line.empty() && line.find("image") == std::string::npos)
+            kept += (kept.empty() ? "" : "; ") + line;
+        pos = end + 1;
+    }
+    if (!kept.empty()) spdlog::warn("{}: {}", file, kept);
     if (!ok || !err.empty()) throw Error(file + ": " + (err.empty() ? "cannot parse glTF" : one_line(err)));
     return model;
 }
