@@ -1,0 +1,244 @@
+#include "core/image_io.h"
+
+#include <ImfChannelList.h>
+#include <ImfCompression.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <stb_image.h>
+#include <stb_image_write.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <system_error>
+
+#include "core/error.h"
+
+namespace npt {
+namespace fs = std::filesystem;
+
+float srgb_to_linear(float v) {
+    if (v <= 0.04045f) return v / 12.92f;
+    return std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
+float linear_to_srgb(float v) {
+    if (v <= 0.0031308f) return v * 12.92f;
+    return 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+namespace {
+
+void check_size(int w, int h, const std::string& name) {
+    if (w <= 0 || h <= 0)
+        throw Error(name + ": image has no pixels (" + std::to_string(w) + "x" + std::to_string(h) + ")");
+    if (w > k_max_image_side || h > k_max_image_side)
+        throw Error(name + ": image size " + std::to_string(w) + "x" + std::to_string(h) +
+                    " exceeds the limit of " + std::to_string(k_max_image_side) + " per side");
+}
+
+// stb returns 1-4 channels; we keep RGB or RGBA.
+template <typename T, typename Convert>
+Image expand_channels(const T* src, int w, int h, int n, Convert convert) {
+    int out_c = (n == 2 || n == 4) ? 4 : 3;
+    Image img(w, h, out_c);
+    size_t count = size_t(w) * size_t(h);
+    for (size_t i = 0; i < count; ++i) {
+        const T* s = src + i * size_t(n);
+        float* d = img.pixels.data() + i * size_t(out_c);
+        if (n <= 2) {
+            d[0] = d[1] = d[2] = convert(s[0]);
+            if (n == 2)
+                d[3] = float(s[1]) / float(std::is_same_v<T, float> ? 1 : (sizeof(T) == 1 ? 255 : 65535));
+        } else {
+            for (int c = 0; c < 3; ++c) d[c] = convert(s[c]);
+            if (n == 4)
+                d[3] = float(s[3]) / float(std::is_same_v<T, float> ? 1 : (sizeof(T) == 1 ? 255 : 65535));
+        }
+    }
+    return img;
+}
+
+struct StbFree {
+    void operator()(void* p) const { stbi_image_free(p); }
+};
+
+Image decode_stb(const unsigned char* data, size_t size, const std::string& name, bool srgb) {
+    if (size == 0) throw Error(name + ": file is empty");
+    if (size > size_t(INT32_MAX)) throw Error(name + ": file is too large to decode");
+    int len = int(size);
+    int w = 0, h = 0, n = 0;
+    if (!stbi_info_from_memory(data, len, &w, &h, &n)) {
+        const char* why = stbi_failure_reason();
+        throw Error(name + ": not a readable image (" + (why ? why : "unknown format") + ")");
+    }
+    check_size(w, h, name);
+    if (stbi_is_hdr_from_memory(data, len)) {
+        std::unique_ptr<float, StbFree> px(stbi_loadf_from_memory(data, len, &w, &h, &n, 0));
+        if (!px) throw Error(name + ": cannot decode HDR image (" + std::string(stbi_failure_reason()) + ")");
+        return expand_channels(px.get(), w, h, n, [](float v) { return v; });
+    }
+    if (stbi_is_16_bit_from_memory(data, len)) {
+        std::unique_ptr<stbi_us, StbFree> px(stbi_load_16_from_memory(data, len, &w, &h, &n, 0));
+        if (!px) throw Error(name + ": cannot decode image (" + std::string(stbi_failure_reason()) + ")");
+        return expand_channels(px.get(), w, h, n, [srgb](stbi_us v) {
+            float f = float(v) / 65535.0f;
+            return srgb ? srgb_to_linear(f) : f;
+        });
+    }
+    std::unique_ptr<stbi_uc, StbFree> px(stbi_load_from_memory(data, len, &w, &h, &n, 0));
+    if (!px) throw Error(name + ": cannot decode image (" + std::string(stbi_failure_reason()) + ")");
+    std::array<float, 256> lut;
+    for (int i = 0; i < 256; ++i)
+        lut[size_t(i)] = srgb ? srgb_to_linear(float(i) / 255.0f) : float(i) / 255.0f;
+    return expand_channels(px.get(), w, h, n, [&lut](stbi_uc v) { return lut[v]; });
+}
+
+bool has_exr_magic(const unsigned char* data, size_t size) {
+    return size >= 4 && data[0] == 0x76 && data[1] == 0x2f && data[2] == 0x31 && data[3] == 0x01;
+}
+
+Image read_exr(const fs::path& path) {
+    const std::string name = path.string();
+    try {
+        Imf::InputFile file(name.c_str());
+        const Imath::Box2i dw = file.header().dataWindow();
+        const long long w = (long long)dw.max.x - dw.min.x + 1, h = (long long)dw.max.y - dw.min.y + 1;
+        if (w > k_max_image_side || h > k_max_image_side || w <= 0 || h <= 0)
+            check_size(int(std::clamp<long long>(w, -1, 1LL << 30)),
+                       int(std::clamp<long long>(h, -1, 1LL << 30)), name);
+        const Imf::ChannelList& ch = file.header().channels();
+        const bool rgb = ch.findChannel("R") && ch.findChannel("G") && ch.findChannel("B");
+        const bool luma = !rgb && ch.findChannel("Y");
+        if (!rgb && !luma) throw Error(name + ": EXR has neither R, G, B nor Y channels");
+        const bool alpha = ch.findChannel("A") != nullptr;
+        Image img(int(w), int(h), alpha ? 4 : 3);
+        const size_t xs = sizeof(float) * size_t(img.channels), ys = xs * size_t(w);
+        // The frame buffer is addressed with absolute data-window coordinates, hence the shifted base
+        // pointer.
+        char* base = reinterpret_cast<char*>(img.pixels.data()) - ptrdiff_t(dw.min.x) * ptrdiff_t(xs) -
+                     ptrdiff_t(dw.min.y) * ptrdiff_t(ys);
+        Imf::FrameBuffer fb;
+        const char* names[3] = {"R", "G", "B"};
+        for (int c = 0; c < 3; ++c)
+            fb.insert(rgb ? names[c] : "Y",
+                      Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, 0.0));
+        if (alpha) fb.insert("A", Imf::Slice(Imf::FLOAT, base + 3 * sizeof(float), xs, ys, 1, 1, 1.0));
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+        return img;
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        std::string what = e.what();
+        std::replace(what.begin(), what.end(), '\n', ' ');
+        throw Error(name + ": cannot read EXR (" + what + ")");
+    }
+}
+
+std::vector<unsigned char> read_bytes(const fs::path& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw Error(path.string() + ": file not found");
+    if (fs::is_directory(path, ec)) throw Error(path.string() + ": is a folder, not an image");
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw Error(path.string() + ": cannot open");
+    return std::vector<unsigned char>(std::istreambuf_iterator<char>(f), {});
+}
+
+// A sibling name unlikely to collide with a concurrent writer, so rename() is atomic in one file system.
+fs::path temp_sibling(const fs::path& path) {
+    std::random_device rd;
+    return path.parent_path() / (path.filename().string() + ".tmp" + std::to_string(rd() % 1000000));
+}
+
+void commit_temp(const fs::path& tmp, const fs::path& path) {
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw Error(path.string() + ": cannot move the written image into place (" + ec.message() + ")");
+    }
+}
+
+void check_writable(const fs::path& path, const Image& image) {
+    check_size(image.width, image.height, path.string());
+    if (image.channels != 3 && image.channels != 4)
+        throw Error(path.string() + ": cannot write an image with " + std::to_string(image.channels) +
+                    " channels");
+    if (image.pixels.size() != size_t(image.width) * size_t(image.height) * size_t(image.channels))
+        throw Error(path.string() + ": image buffer size does not match its dimensions");
+}
+
+}  // namespace
+
+Image decode_image(const unsigned char* data, size_t size, const std::string& name, bool srgb) {
+    if (has_exr_magic(data, size)) throw Error(name + ": embedded EXR images are not supported");
+    return decode_stb(data, size, name, srgb);
+}
+
+Image read_image(const fs::path& path, bool srgb) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw Error(path.string() + ": file not found");
+    std::ifstream f(path, std::ios::binary);
+    unsigned char magic[4] = {0, 0, 0, 0};
+    f.read(reinterpret_cast<char*>(magic), 4);
+    if (has_exr_magic(magic, size_t(f.gcount()))) return read_exr(path);
+    std::vector<unsigned char> bytes = read_bytes(path);
+    return decode_stb(bytes.data(), bytes.size(), path.string(), srgb);
+}
+
+void write_exr(const fs::path& path, const Image& image) {
+    check_writable(path, image);
+    const fs::path tmp = temp_sibling(path);
+    try {
+        Imf::Header header(image.width, image.height);
+        header.compression() = Imf::ZIP_COMPRESSION;
+        for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+        Imf::FrameBuffer fb;
+        const size_t xs = sizeof(float) * size_t(image.channels), ys = xs * size_t(image.width);
+        // OpenEXR's Slice takes a non-const pointer even for writing; it only reads through it.
+        char* base = const_cast<char*>(reinterpret_cast<const char*>(image.pixels.data()));
+        const char* names[3] = {"R", "G", "B"};
+        for (int c = 0; c < 3; ++c)
+            fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
+        {
+            Imf::OutputFile out(tmp.string().c_str(), header);
+            out.setFrameBuffer(fb);
+            out.writePixels(image.height);
+        }
+    } catch (const std::exception& e) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        std::string what = e.what();
+        std::replace(what.begin(), what.end(), '\n', ' ');
+        throw Error(path.string() + ": cannot write EXR (" + what + ")");
+    }
+    commit_temp(tmp, path);
+}
+
+void write_png(const fs::path& path, const Image& image, float exposure_stops) {
+    check_writable(path, image);
+    const float scale = std::exp2(exposure_stops);
+    std::vector<unsigned char> rgb(size_t(image.width) * size_t(image.height) * 3);
+    for (size_t i = 0, n = size_t(image.width) * size_t(image.height); i < n; ++i)
+        for (size_t c = 0; c < 3; ++c) {
+            float v = image.pixels[i * size_t(image.channels) + c] * scale;
+            v = std::isfinite(v) ? std::clamp(linear_to_srgb(std::max(v, 0.0f)), 0.0f, 1.0f)
+                                 : (v > 0 ? 1.0f : 0.0f);
+            rgb[i * 3 + c] = static_cast<unsigned char>(std::lround(v * 255.0f));
+        }
+    const fs::path tmp = temp_sibling(path);
+    if (!stbi_write_png(tmp.string().c_str(), image.width, image.height, 3, rgb.data(), image.width * 3)) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw Error(path.string() + ": cannot write PNG (is the folder writable?)");
+    }
+    commit_temp(tmp, path);
+}
+
+}  // namespace npt

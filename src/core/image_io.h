@@ -1,0 +1,34 @@
+// Reading and writing image files: PNG/JPG/TGA/HDR through stb, EXR through OpenEXR. Writes go to a temporary
+// file in the destination folder and are renamed into place, so a crash never leaves a half-written image.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+
+#include "core/image.h"
+
+namespace npt {
+
+// Largest accepted width or height; checked before any pixel memory is allocated.
+constexpr int k_max_image_side = 32768;
+
+float srgb_to_linear(float v);
+float linear_to_srgb(float v);
+
+// Reads an image file into 3 (RGB) or 4 (RGBA) float channels. 8/16-bit formats are decoded through the sRGB
+// EOTF when `srgb` is true (colour images), or scaled to [0, 1] as they are when false (data such as normal
+// or roughness maps). HDR and EXR are scene-linear already and returned as stored. Throws npt::Error naming
+// the file.
+Image read_image(const std::filesystem::path& path, bool srgb = true);
+
+// The same for an encoded file held in memory (a glTF .glb buffer view or data URI); `name` is for messages.
+Image decode_image(const unsigned char* data, size_t size, const std::string& name, bool srgb = true);
+
+// float32 RGB (alpha dropped), scene-linear, ZIP compression (lossless).
+void write_exr(const std::filesystem::path& path, const Image& image);
+
+// 8-bit sRGB: value x 2^exposure_stops, sRGB OETF, clamped to [0, 1]; alpha dropped.
+void write_png(const std::filesystem::path& path, const Image& image, float exposure_stops = 0.0f);
+
+}  // namespace npt

@@ -1,0 +1,240 @@
+#include "scene/json_scene.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "scene/gltf_loader.h"
+#include "scene/obj_loader.h"
+#include "scene/texture_utils.h"
+
+namespace npt::scene {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// Typed accessors that fail with "<file>: <field>: expected ..." so each message names exactly what is wrong.
+class Reader {
+  public:
+    explicit Reader(std::string file) : m_file(std::move(file)) {}
+
+    [[noreturn]] void fail(const std::string& field, const std::string& msg) const {
+        throw Error(m_file + ": " + field + ": " + msg);
+    }
+    double number(const json& v, const std::string& field) const {
+        if (!v.is_number()) fail(field, "expected a number");
+        const double d = v.get<double>();
+        if (!std::isfinite(d)) fail(field, "expected a finite number");
+        return d;
+    }
+    int integer(const json& v, const std::string& field, int lo, int hi) const {
+        if (!v.is_number_integer() || v.get<long long>() < lo || v.get<long long>() > hi)
+            fail(field, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+        return int(v.get<long long>());
+    }
+    std::string string(const json& v, const std::string& field) const {
+        if (!v.is_string() || v.get<std::string>().empty()) fail(field, "expected a non-empty string");
+        return v.get<std::string>();
+    }
+    std::vector<double> numbers(const json& v, const std::string& field, size_t n) const {
+        const std::string expect = "expected an array of " + std::to_string(n) + " numbers";
+        if (!v.is_array() || v.size() != n) fail(field, expect);
+        std::vector<double> out;
+        for (const auto& e : v) {
+            if (!e.is_number() || !std::isfinite(e.get<double>())) fail(field, expect);
+            out.push_back(e.get<double>());
+        }
+        return out;
+    }
+    Vec3 vec3(const json& v, const std::string& field) const {
+        auto d = numbers(v, field, 3);
+        return {float(d[0]), float(d[1]), float(d[2])};
+    }
+    void check_keys(const json& obj, const std::string& field,
+                    std::initializer_list<const char*> known) const {
+        for (const auto& [key, value] : obj.items())
+            if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
+                spdlog::warn("{}: {}{}: unknown key, ignored", m_file, field.empty() ? "" : field + ".", key);
+    }
+    const std::string& file() const { return m_file; }
+
+  private:
+    std::string m_file;
+};
+
+json parse_file(const fs::path& path) {
+    const std::string file = path.string();
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw Error(file + ": file not found");
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw Error(file + ": cannot open");
+    std::stringstream ss;
+    ss << f.rdbuf();
+    const std::string text = ss.str();
+    if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw Error(file + ": file is empty");
+    try {
+        return json::parse(text, nullptr, true, /*ignore_comments=*/true);
+    } catch (const json::parse_error& e) {
+        throw Error(file + ": malformed JSON at byte " + std::to_string(e.byte) + " (" + e.what() + ")");
+    }
+}
+
+Mat4 placement(const Reader& r, const json& inc, const std::string& field) {
+    Mat4 t, rot, s;
+    if (inc.contains("translation")) {
+        auto v = r.numbers(inc["translation"], field + ".translation", 3);
+        t = Mat4::translation(v[0], v[1], v[2]);
+    }
+    if (inc.contains("rotation")) {
+        auto q = r.numbers(inc["rotation"], field + ".rotation", 4);
+        if (q[0] == 0 && q[1] == 0 && q[2] == 0 && q[3] == 0)
+            r.fail(field + ".rotation", "quaternion (x, y, z, w) must not be zero");
+        rot = Mat4::rotation_quat(q[0], q[1], q[2], q[3]);
+    }
+    if (inc.contains("scale")) {
+        auto v = r.numbers(inc["scale"], field + ".scale", 3);
+        if (v[0] == 0 || v[1] == 0 || v[2] == 0) r.fail(field + ".scale", "components must not be zero");
+        s = Mat4::scale(v[0], v[1], v[2]);
+    }
+    return t * rot * s;
+}
+
+void load_include(const Reader& r, const json& inc, const std::string& field, const fs::path& dir,
+                  Scene& scene) {
+    std::string rel;
+    Mat4 m;
+    if (inc.is_string()) {
+        rel = r.string(inc, field);
+    } else if (inc.is_object()) {
+        if (!inc.contains("file")) r.fail(field + ".file", "missing");
+        rel = r.string(inc["file"], field + ".file");
+        r.check_keys(inc, field, {"file", "translation", "rotation", "scale"});
+        m = placement(r, inc, field);
+    } else {
+        r.fail(field, "expected a file name or an object {\"file\": ...}");
+    }
+    const fs::path p = dir / rel;
+    std::error_code ec;
+    if (!fs::exists(p, ec)) r.fail(field, "file '" + p.string() + "' not found");
+    std::string ext = p.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".gltf" || ext == ".glb") {
+        load_gltf(p, LoadOptions{}, scene, m);
+    } else if (ext == ".obj") {
+        load_obj(p, scene, m);
+    } else {
+        r.fail(field, "'" + rel + "': can include only .gltf, .glb and .obj files");
+    }
+}
+
+void read_camera(const Reader& r, const json& c, Scene& scene) {
+    if (!c.is_object()) r.fail("camera", "expected an object");
+    if (c.contains("name")) {
+        r.check_keys(c, "camera", {"name"});
+        const std::string name = r.string(c["name"], "camera.name");
+        std::string names;
+        for (size_t i = 0; i < scene.cameras.size(); ++i) {
+            if (scene.cameras[i].name == name) {
+                scene.camera = int(i);
+                return;
+            }
+            names += (names.empty() ? "'" : ", '") + scene.cameras[i].name + "'";
+        }
+        r.fail("camera.name", "camera '" + name + "' not found in the included files (available: " +
+                                  (names.empty() ? "none" : names) + ")");
+    }
+    r.check_keys(c, "camera", {"position", "look_at", "up", "yfov_deg", "aspect"});
+    for (const char* key : {"position", "look_at"})
+        if (!c.contains(key)) r.fail(std::string("camera.") + key, "missing (or give {\"name\": ...})");
+    Camera cam;
+    cam.name = "json";
+    cam.position = r.vec3(c["position"], "camera.position");
+    const Vec3 target = r.vec3(c["look_at"], "camera.look_at");
+    const Vec3 up = c.contains("up") ? r.vec3(c["up"], "camera.up") : Vec3(0, 1, 0);
+    const Vec3 f = target - cam.position;
+    if (!(length(f) > 0.0f)) r.fail("camera.look_at", "must differ from camera.position");
+    cam.forward = normalize(f);
+    const Vec3 right = cross(cam.forward, up);
+    if (!(length(right) > 1e-6f * length(up)))
+        r.fail("camera.up", "must not be parallel to the view direction");
+    cam.right = normalize(right);
+    cam.up = cross(cam.right, cam.forward);
+    if (c.contains("yfov_deg")) {
+        const double deg = r.number(c["yfov_deg"], "camera.yfov_deg");
+        if (!(deg > 0 && deg < 180)) r.fail("camera.yfov_deg", "expected degrees in (0, 180)");
+        cam.yfov = float(deg * 3.14159265358979323846 / 180.0);
+    }
+    if (c.contains("aspect")) cam.aspect = float(r.number(c["aspect"], "camera.aspect"));
+    scene.cameras.push_back(cam);
+    scene.camera = int(scene.cameras.size()) - 1;
+}
+
+void read_environment(const Reader& r, const json& e, const fs::path& dir, Scene& scene) {
+    if (!e.is_object()) r.fail("environment", "expected an object");
+    r.check_keys(e, "environment", {"file", "strength", "rotation_deg"});
+    if (e.contains("file")) {
+        const fs::path p = dir / r.string(e["file"], "environment.file");
+        try {
+            scene.textures.push_back(make_texture(read_image(p, true), p.string()));
+        } catch (const Error& err) {
+            r.fail("environment.file", err.what());
+        }
+        scene.environment.texture = int(scene.textures.size()) - 1;
+    }
+    if (e.contains("strength")) {
+        scene.environment.strength = float(r.number(e["strength"], "environment.strength"));
+        if (scene.environment.strength < 0) r.fail("environment.strength", "must not be negative");
+    }
+    if (e.contains("rotation_deg"))
+        scene.environment.rotation_y =
+            float(r.number(e["rotation_deg"], "environment.rotation_deg") * 3.14159265358979323846 / 180.0);
+}
+
+void read_render(const Reader& r, const json& j, RenderSettings& s) {
+    if (!j.is_object()) r.fail("render", "expected an object");
+    r.check_keys(j, "render", {"width", "height", "spp", "max_depth", "seed"});
+    if (j.contains("width")) s.width = r.integer(j["width"], "render.width", 1, k_max_image_side);
+    if (j.contains("height")) s.height = r.integer(j["height"], "render.height", 1, k_max_image_side);
+    if (j.contains("spp")) s.spp = r.integer(j["spp"], "render.spp", 1, 1 << 24);
+    if (j.contains("max_depth")) s.max_depth = r.integer(j["max_depth"], "render.max_depth", 0, 1024);
+    if (j.contains("seed")) {
+        if (!j["seed"].is_number_unsigned()) r.fail("render.seed", "expected a non-negative integer");
+        s.seed = j["seed"].get<uint64_t>();
+    }
+}
+
+}  // namespace
+
+void load_json_scene(const fs::path& path, const LoadOptions& options, Scene& scene) {
+    const json root = parse_file(path);
+    const Reader r(path.string());
+    if (!root.is_object()) r.fail("(top level)", "expected an object");
+    r.check_keys(root, "", {"include", "camera", "environment", "background", "render"});
+    const fs::path dir = path.parent_path();
+
+    if (root.contains("include")) {
+        const json& inc = root["include"];
+        if (!inc.is_array()) r.fail("include", "expected an array of files");
+        for (size_t i = 0; i < inc.size(); ++i)
+            load_include(r, inc[i], "include[" + std::to_string(i) + "]", dir, scene);
+    }
+    // The JSON's own settings override whatever the included files said.
+    if (root.contains("background")) scene.environment.color = r.vec3(root["background"], "background");
+    if (root.contains("environment")) read_environment(r, root["environment"], dir, scene);
+    if (root.contains("render")) read_render(r, root["render"], scene.settings);
+    if (!options.camera_name.empty()) {
+        read_camera(r, json{{"name", options.camera_name}}, scene);
+    } else if (root.contains("camera")) {
+        read_camera(r, root["camera"], scene);
+    }
+}
+
+}  // namespace npt::scene
