@@ -1,7 +1,7 @@
 // Generates src/materials/ggx_albedo_table.h: the directional albedo E(mu, roughness) of a single-scattering
 // GGX reflection lobe with Fresnel = 1, and its cosine-weighted average E_avg(roughness), used by the
 // multiple-scattering compensation of Kulla & Conty 2017. Float64 tensor-product midpoint quadrature over the
-// unit square of Heitz 2018 visible-normal sampling, where the integrand G2/G1 is smooth.
+// unit square of Heitz 2018 visible-normal sampling, where the integrand is G2/G1.
 //
 //   c++ -O2 -std=c++20 scripts/gen_ggx_albedo_table.cpp -o /tmp/gen && /tmp/gen >
 //   src/materials/ggx_albedo_table.h
@@ -45,7 +45,11 @@ double albedo(double mu, double alpha) {
     V3 t2{vh.y * t1.z - vh.z * t1.y, vh.z * t1.x - vh.x * t1.z, vh.x * t1.y - vh.y * t1.x};
     double sum = 0.0;
     for (int i = 0; i < k_quad; ++i) {
-        double u1 = (i + 0.5) / k_quad;
+        // u1 = 1 - (1 - v)^3 resolves u1 -> 1, where the visible normals tilt to the horizon and the reflected
+        // direction crosses it; the weight is the Jacobian du1/dv.
+        double v = (i + 0.5) / k_quad;
+        double u1 = 1.0 - std::pow(1.0 - v, 3.0);
+        double jac = 3.0 * (1.0 - v) * (1.0 - v);
         double r = std::sqrt(u1);
         for (int j = 0; j < k_quad; ++j) {
             double phi = 2.0 * M_PI * (j + 0.5) / k_quad;
@@ -59,7 +63,7 @@ double albedo(double mu, double alpha) {
             double d = wo.x * m.x + wo.y * m.y + wo.z * m.z;
             double wiz = 2.0 * d * m.z - wo.z;
             if (wiz <= 0.0) continue;
-            sum += (1.0 + lo) / (1.0 + lo + lambda(wiz, alpha));
+            sum += jac * (1.0 + lo) / (1.0 + lo + lambda(wiz, alpha));
         }
     }
     return sum / (double(k_quad) * k_quad);
