@@ -80,6 +80,9 @@ NPT_HD NPT_INLINE PrincipledLobeProbs principled_probs(const Principled& p, floa
     return {w_spec / sum, w_cos / sum, w_trans / sum};
 }
 
+// From inside the body (wo.z < 0, only reachable through transmission) diffuse and metal play no part: the
+// path meets only the dielectric interface, with the exact Fresnel term (Schlick has no total internal
+// reflection).
 NPT_HD NPT_INLINE Rgb principled_eval(const Principled& p, Vec3 wo, Vec3 wi) {
     if (wo.z < 0.0f) return p.w_trans > 0.0f ? dielectric_eval(p.inside, wo, wi) : Rgb(0.0f);
     if (wo.z == 0.0f) return Rgb(0.0f);
