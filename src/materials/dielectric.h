@@ -1,6 +1,6 @@
 // Smooth and rough (GGX, Walter et al. 2007) dielectric interface: reflection plus refraction with the exact
 // Fresnel term, sampled through visible normals (Heitz 2018). Transmission transports radiance (1/eta^2) and
-// is tinted by glTF's base colour; KHR_materials_specular scales the reflectance.
+// is tinted by glTF's base colour at every crossing; KHR_materials_specular scales the reflectance.
 #pragma once
 
 #include "materials/bsdf_types.h"
