@@ -20,7 +20,7 @@ constexpr float k_inv_4pi = 0.07957747154594766788f;
 
 struct Vec2 {
     float x = 0, y = 0;
-    NPT_HD constexpr Vec2() = default;
+    constexpr Vec2() = default;
     NPT_HD constexpr Vec2(float x_, float y_) : x(x_), y(y_) {}
     NPT_HD Vec2 operator+(Vec2 o) const { return {x + o.x, y + o.y}; }
     NPT_HD Vec2 operator-(Vec2 o) const { return {x - o.x, y - o.y}; }
@@ -29,7 +29,7 @@ struct Vec2 {
 
 struct Vec3 {
     float x = 0, y = 0, z = 0;
-    NPT_HD constexpr Vec3() = default;
+    constexpr Vec3() = default;
     NPT_HD constexpr explicit Vec3(float s) : x(s), y(s), z(s) {}
     NPT_HD constexpr Vec3(float x_, float y_, float z_) : x(x_), y(y_), z(z_) {}
     NPT_HD float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
