@@ -36,13 +36,15 @@ struct Light {
 
 // What sample_light (lights/light.h) returns.
 struct LightSample {
-    Rgb radiance;  // radiance (or for delta lights: intensity/d^2 or illuminance) arriving at ref_p along
-                   // -wi, NOT divided by pdf
+    // Radiance (for delta lights: intensity / d^2, or the illuminance) arriving at ref_p along -wi, NOT
+    // divided by pdf.
+    Rgb radiance;
     Vec3 wi;         // unit direction from ref_p towards the light
     float distance;  // distance to the sampled light point; INFINITY for directional and environment
-    float pdf;       // solid-angle density INCLUDING the light-selection probability; for delta lights the
-                     // selection probability alone
-    bool is_delta;   // point, spot, directional
+    // Solid-angle density INCLUDING the light-selection probability; for delta lights the selection
+    // probability alone.
+    float pdf;
+    bool is_delta;  // point, spot, directional
 };
 
 }  // namespace npt::lights
