@@ -3,6 +3,7 @@
 // that triangle_light_pdf reproduces the pdf of sample_light.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/rng.h"
