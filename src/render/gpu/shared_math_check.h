@@ -1,0 +1,49 @@
+// Runs the shared NPT_HD math (BSDFs, light sampling, camera rays) on the GPU for a batch of inputs, so a test can
+// compare it with the same functions on the CPU. Plain C++ interface: callers need no CUDA headers.
+#pragma once
+
+#include <vector>
+
+#include "core/vec.h"
+#include "lights/light.h"
+#include "materials/bsdf_types.h"
+#include "render/scene_view.h"
+
+namespace npt::gpu {
+
+// True when a CUDA device can be used here.
+bool device_available();
+
+struct BsdfCase {
+    materials::Bsdf bsdf;
+    Vec3 wo, wi;
+    float u_lobe;
+    Vec2 u;
+};
+struct BsdfResult {
+    Rgb f;
+    float pdf;
+    bool sampled;
+    materials::BsdfSample sample;
+};
+std::vector<BsdfResult> run_bsdf_cases(const std::vector<BsdfCase>& cases);
+
+struct CameraCase {
+    int i, j;
+    Vec2 u;
+};
+std::vector<Ray> run_camera_cases(const render::CameraView& camera, const std::vector<CameraCase>& cases);
+
+struct LightCase {
+    Vec3 ref_p;
+    float u_select;
+    Vec2 u;
+};
+struct LightResult {
+    bool sampled;
+    lights::LightSample sample;
+};
+// `lights` points at host memory; its arrays are copied to the device for the run.
+std::vector<LightResult> run_light_cases(const lights::LightSetView& lights, const std::vector<LightCase>& cases);
+
+}  // namespace npt::gpu
