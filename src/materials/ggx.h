@@ -19,18 +19,20 @@ NPT_HD NPT_INLINE float ggx_alpha_from_roughness(float roughness) {
 }
 NPT_HD NPT_INLINE bool ggx_is_smooth(float alpha) { return alpha < k_delta_alpha; }
 
+// sin^2 is taken from the tangential components, not as 1 - cos^2: near the peak of a sharp lobe 1 - cos^2
+// cancels catastrophically in float and D would lose most of its digits.
 NPT_HD NPT_INLINE float ggx_d(float alpha, Vec3 wm) {
     float cos2 = wm.z * wm.z;
     if (cos2 <= 0.0f) return 0.0f;
     float a2 = alpha * alpha;
-    float t = cos2 * (a2 - 1.0f) + 1.0f;
+    float t = (wm.x * wm.x + wm.y * wm.y) + cos2 * a2;
     return a2 / (k_pi * t * t);
 }
 
 NPT_HD NPT_INLINE float ggx_lambda(float alpha, Vec3 w) {
     float cos2 = w.z * w.z;
     if (cos2 <= 0.0f) return 1e30f;
-    float tan2 = fmaxf(0.0f, 1.0f - cos2) / cos2;
+    float tan2 = (w.x * w.x + w.y * w.y) / cos2;  // not (1 - cos2) / cos2, for the same reason as in ggx_d
     return 0.5f * (-1.0f + sqrtf(1.0f + alpha * alpha * tan2));
 }
 

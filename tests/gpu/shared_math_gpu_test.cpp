@@ -1,8 +1,13 @@
-// The shared NPT_HD math gives the same answers on the GPU as on the CPU: BSDF eval/pdf/sample, light sampling,
-// camera rays, for random inputs. Both sides run the same source; they differ only by floating-point contraction
-// (nvcc fuses multiply-adds, g++ at -O3 without -ffast-math mostly does not) and by device sqrt/sin/cos within
-// 1-2 ulp. So values agree to a relative 1e-4, and a discrete choice (which lobe, accept/reject) may flip only when
-// the random number lies within rounding of a threshold: we allow at most 0.1% of cases to differ in such a choice.
+// The shared NPT_HD math gives the same answers on the GPU as on the CPU: BSDF eval/pdf/sample, light
+// sampling, camera rays, for random inputs. Both sides run the same source; they differ only by
+// floating-point contraction (nvcc fuses multiply-adds, g++ at -O3 without -ffast-math mostly does not) and
+// by device sqrt/sin/cos within 1-2 ulp. So smooth quantities agree to a relative 1e-4 (compared against a
+// floor of 1e-2 where tails of the lobes are tiny and cancellation rules); a discrete choice (which lobe,
+// accept/reject) may flip only when the random number lies within rounding of a threshold, so at most 0.1% of
+// cases may differ. A sampled direction is well conditioned, but f and pdf at it are not for sharp GGX lobes
+// (D changes by a factor ~ 1/alpha^2 per radian, so a 1e-7 difference in the half vector moves them ~1e-3 at
+// roughness 0.1): for samples we compare the direction and the path weight f |cos| / pdf, which is smooth, at
+// 1e-4, and f and pdf themselves at 1e-2.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -16,10 +21,13 @@
 namespace npt {
 namespace {
 
-constexpr float k_rel = 1e-4f;
-
-bool close(float a, float b) { return std::fabs(a - b) <= k_rel * std::max({1e-3f, std::fabs(a), std::fabs(b)}); }
-bool close(Vec3 a, Vec3 b) { return close(a.x, b.x) && close(a.y, b.y) && close(a.z, b.z); }
+bool close(float a, float b, float rel = 1e-4f) {
+    return std::fabs(a - b) <= rel * std::max({1e-2f, std::fabs(a), std::fabs(b)});
+}
+bool close(Vec3 a, Vec3 b, float rel = 1e-4f) {
+    return close(a.x, b.x, rel) && close(a.y, b.y, rel) && close(a.z, b.z, rel);
+}
+Rgb path_weight(const materials::BsdfSample& s) { return s.f * (std::fabs(s.wi.z) / s.pdf); }
 
 Vec3 random_direction(std::mt19937& g, bool upper) {
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
@@ -41,7 +49,8 @@ TEST(SharedMathGpu, BsdfsMatchCpu) {
         materials::Bsdf b = materials::make_bsdf({u(g), u(g), u(g)}, metallic, roughness, specular, {1, 1, 1},
                                                  transmission, 1.0f + 1.5f * u(g));
         bool reflective_only = !materials::bsdf_has_transmission(b);
-        cases.push_back({b, random_direction(g, reflective_only), random_direction(g, false), u(g), {u(g), u(g)}});
+        cases.push_back(
+            {b, random_direction(g, reflective_only), random_direction(g, false), u(g), {u(g), u(g)}});
     }
     std::vector<gpu::BsdfResult> gpu_results = gpu::run_bsdf_cases(cases);
     ASSERT_EQ(gpu_results.size(), cases.size());
@@ -51,16 +60,32 @@ TEST(SharedMathGpu, BsdfsMatchCpu) {
         const auto& r = gpu_results[i];
         Rgb f = materials::bsdf_eval(c.bsdf, c.wo, c.wi);
         float pdf = materials::bsdf_pdf(c.bsdf, c.wo, c.wi);
-        if (!close(f, r.f) || !close(pdf, r.pdf)) ++value_mismatches;
+        if ((!close(f, r.f) || !close(pdf, r.pdf)) && ++value_mismatches <= 4)
+            std::printf("value %zu: kind %d rough %.4f: cpu f %.6g pdf %.6g | gpu f %.6g pdf %.6g\n", i,
+                        int(c.bsdf.kind), c.bsdf.roughness, f.x, pdf, r.f.x, r.pdf);
         materials::BsdfSample s{};
         bool sampled = materials::bsdf_sample(c.bsdf, c.wo, c.u_lobe, c.u, &s);
-        if (sampled != r.sampled || (sampled && s.is_delta != r.sample.is_delta)) {
-            ++choice_flips;
-            continue;
+        // The GPU's f and pdf are checked against the CPU's eval/pdf at the GPU's own direction, which
+        // removes the ill-conditioning of sharp lobes with respect to the direction (see the top of the
+        // file).
+        bool differs = sampled != r.sampled;
+        if (sampled && !differs) {
+            bool delta = s.is_delta != r.sample.is_delta;
+            Rgb f_at = r.sample.is_delta ? r.sample.f : materials::bsdf_eval(c.bsdf, c.wo, r.sample.wi);
+            float pdf_at = r.sample.is_delta ? r.sample.pdf : materials::bsdf_pdf(c.bsdf, c.wo, r.sample.wi);
+            differs = delta || !close(s.wi, r.sample.wi) || !close(path_weight(s), path_weight(r.sample)) ||
+                      !close(f_at, r.sample.f, 1e-3f) || !close(pdf_at, r.sample.pdf, 1e-3f);
         }
-        if (sampled && (!close(s.wi, r.sample.wi) || !close(s.f, r.sample.f) || !close(s.pdf, r.sample.pdf))) {
-            // Same lobe, different direction: only acceptable as a lobe flip inside the mixture.
-            ++choice_flips;
+        if (differs && ++choice_flips <= 8) {
+            std::printf(
+                "flip %zu: kind %d rough %.4f metal %.3f trans %.3f ior %.3f wo (%.4f %.4f %.4f) u_lobe %.6f "
+                "u (%.6f %.6f)\n"
+                "  cpu %d wi (%.5f %.5f %.5f) f %.5g pdf %.5g delta %d | gpu %d wi (%.5f %.5f %.5f) f %.5g "
+                "pdf %.5g delta %d\n",
+                i, int(c.bsdf.kind), c.bsdf.roughness, c.bsdf.metallic, c.bsdf.transmission, c.bsdf.ior,
+                c.wo.x, c.wo.y, c.wo.z, c.u_lobe, c.u.x, c.u.y, sampled, s.wi.x, s.wi.y, s.wi.z, s.f.x, s.pdf,
+                s.is_delta, r.sampled, r.sample.wi.x, r.sample.wi.y, r.sample.wi.z, r.sample.f.x,
+                r.sample.pdf, r.sample.is_delta);
         }
     }
     EXPECT_LE(value_mismatches, int(cases.size() / 1000)) << "eval/pdf differ beyond 1e-4 relative";
@@ -153,9 +178,10 @@ TEST(SharedMathGpu, LightSamplingMatchesCpu) {
             continue;
         }
         if (!ok) continue;
-        bool same = close(s.wi, r.sample.wi) && close(s.radiance, r.sample.radiance) && close(s.pdf, r.sample.pdf) &&
-                    s.is_delta == r.sample.is_delta && (std::isinf(s.distance) ? std::isinf(r.sample.distance)
-                                                                                 : close(s.distance, r.sample.distance));
+        bool same =
+            close(s.wi, r.sample.wi) && close(s.radiance, r.sample.radiance) && close(s.pdf, r.sample.pdf) &&
+            s.is_delta == r.sample.is_delta &&
+            (std::isinf(s.distance) ? std::isinf(r.sample.distance) : close(s.distance, r.sample.distance));
         if (!same) ++flips;
     }
     EXPECT_LE(flips, int(cases.size() / 1000));
