@@ -4,7 +4,7 @@
 //   struct Tracer { bool intersect(const Ray&, float tmax, Hit*) const; bool occluded(const Ray&, float tmax) const; };
 #pragma once
 
-#include "core/rng.h"
+#include "core/sobol_sampler.h"
 #include "core/vec.h"
 #include "lights/light.h"
 #include "materials/bsdf.h"
@@ -32,9 +32,10 @@ NPT_HD NPT_INLINE bool geometry_agrees(const SurfaceInteraction& si, Vec3 wo, Ve
     return (go * gi > 0.0f) == (so * s_i > 0.0f);
 }
 
-// Radiance arriving at the ray origin along `ray`. `rng` is the pixel's own stream.
-template <class Tracer>
-NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Pcg32& rng, const PathSettings& ps) {
+// Radiance arriving at the ray origin along `ray`. `sampler` gives this pixel-sample's random numbers, one
+// dimension per decision in a fixed order (so low-discrepancy samplers stratify each decision).
+template <class Tracer, class Sampler>
+NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sampler& sampler, const PathSettings& ps) {
     Rgb radiance(0.0f), throughput(1.0f);
     bool specular_bounce = true;  // the camera ray counts as specular: no MIS on what it sees
     float prev_bsdf_pdf = 0.0f;
@@ -71,8 +72,8 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Pcg32&
         // Next-event estimation: one light sample, weighted against the BSDF strategy.
         if (!materials::bsdf_is_delta(bsdf)) {
             lights::LightSample ls;
-            float u_select = rng.next_float();
-            Vec2 u_light = rng.next_2d();
+            float u_select = sampler.next_1d();
+            Vec2 u_light = sampler.next_2d();
             if (lights::sample_light(sv.lights, si.p, u_select, u_light, &ls) && ls.pdf > 0.0f &&
                 !is_black(ls.radiance)) {
                 Vec3 wi = si.shading.to_local(ls.wi);
@@ -90,8 +91,8 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Pcg32&
 
         // Continue the path by sampling the BSDF.
         materials::BsdfSample bs;
-        float u_lobe = rng.next_float();
-        Vec2 u_dir = rng.next_2d();
+        float u_lobe = sampler.next_1d();
+        Vec2 u_dir = sampler.next_2d();
         if (!materials::bsdf_sample(bsdf, wo, u_lobe, u_dir, &bs) || bs.pdf <= 0.0f) break;
         Vec3 wi_world = si.shading.to_world(bs.wi);
         if (!geometry_agrees(si, wo_world, wi_world)) break;
@@ -104,7 +105,7 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Pcg32&
 
         if (depth + 1 >= ps.rr_start_depth) {
             float survive = fminf(0.95f, max_component(throughput));
-            if (rng.next_float() >= survive) break;
+            if (sampler.next_1d() >= survive) break;
             throughput *= 1.0f / survive;
         }
     }

@@ -38,11 +38,11 @@ Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const 
     auto render_tile = [&](const tbb::blocked_range2d<int>& r) {
         for (int y = r.rows().begin(); y < r.rows().end(); ++y)
             for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
-                Pcg32 rng = Pcg32::for_pixel(options.seed, uint32_t(x), uint32_t(y), 0);
                 Rgb sum(0.0f);
                 for (int s = 0; s < spp; ++s) {
-                    Ray ray = generate_camera_ray(sv.camera, x, y, rng.next_2d());
-                    Rgb l = trace_path(sv, tracer, ray, rng, ps);
+                    SobolSampler sampler(options.seed, uint32_t(x), uint32_t(y), uint32_t(s));
+                    Ray ray = generate_camera_ray(sv.camera, x, y, sampler.next_2d());
+                    Rgb l = trace_path(sv, tracer, ray, sampler, ps);
                     if (is_finite(l)) {
                         sum += l;
                     } else {
