@@ -27,12 +27,17 @@ int main(int argc, char** argv) {
             }
             return argv[++i];
         };
-        if (a == "--spp") spp = std::atoi(next().c_str());
-        else if (a == "--threads") threads = std::atoi(next().c_str());
-        else if (a == "--repeats") repeats = std::atoi(next().c_str());
-        else if (a == "--scene") scenes.push_back(next());
+        if (a == "--spp")
+            spp = std::atoi(next().c_str());
+        else if (a == "--threads")
+            threads = std::atoi(next().c_str());
+        else if (a == "--repeats")
+            repeats = std::atoi(next().c_str());
+        else if (a == "--scene")
+            scenes.push_back(next());
         else {
-            std::fprintf(stderr, "usage: render_bench [--spp N] [--threads N] [--repeats N] [--scene NAME]...\n");
+            std::fprintf(stderr,
+                         "usage: render_bench [--spp N] [--threads N] [--repeats N] [--scene NAME]...\n");
             return 2;
         }
     }
@@ -40,8 +45,10 @@ int main(int argc, char** argv) {
     const char* data = std::getenv("NERFPT_SHARED_DATA");
     std::filesystem::path root = data ? data : NERFPT_SHARED_DATA;
 
-    std::printf("| scene | res | spp | threads | load+build s | render s (best of %d) | Msamples/s | relMSE vs ref |\n",
-                repeats);
+    std::printf(
+        "| scene | res | spp | threads | load+build s | render s (best of %d) | Msamples/s | relMSE vs ref "
+        "|\n",
+        repeats);
     std::printf("|---|---|---|---|---|---|---|---|\n");
     try {
         for (const auto& name : scenes) {
@@ -61,13 +68,14 @@ int main(int argc, char** argv) {
             for (int r = 0; r < repeats; ++r) {
                 auto s = std::chrono::steady_clock::now();
                 img = render::render(scene, o);
-                best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - s).count());
+                best = std::min(best,
+                                std::chrono::duration<double>(std::chrono::steady_clock::now() - s).count());
             }
             ImageComparison c = compare_images(img, ref);
             double samples = double(o.width) * o.height * o.spp;
-            std::printf("| %s | %dx%d | %d | %d | %.3f | %.3f | %.3f | %.3g |\n", name.c_str(), o.width, o.height,
-                        o.spp, threads, std::chrono::duration<double>(t1 - t0).count(), best, samples / best * 1e-6,
-                        c.rel_mse);
+            std::printf("| %s | %dx%d | %d | %d | %.3f | %.3f | %.3f | %.3g |\n", name.c_str(), o.width,
+                        o.height, o.spp, threads, std::chrono::duration<double>(t1 - t0).count(), best,
+                        samples / best * 1e-6, c.rel_mse);
         }
     } catch (const Error& e) {
         std::fprintf(stderr, "render_bench: %s\n", e.what());

@@ -10,8 +10,9 @@ namespace {
 
 void check_same_size(const Image& a, const Image& b) {
     if (a.width != b.width || a.height != b.height || a.channels < 3 || b.channels < 3)
-        throw Error("image comparison: sizes differ (" + std::to_string(a.width) + "x" + std::to_string(a.height) +
-                    " vs " + std::to_string(b.width) + "x" + std::to_string(b.height) + ")");
+        throw Error("image comparison: sizes differ (" + std::to_string(a.width) + "x" +
+                    std::to_string(a.height) + " vs " + std::to_string(b.width) + "x" +
+                    std::to_string(b.height) + ")");
 }
 
 }  // namespace

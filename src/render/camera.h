@@ -1,5 +1,5 @@
-// Primary rays: pixel (i, j), i rightwards and j downwards from the top-left, is the average radiance over its
-// square footprint on the image plane (box filter of width one pixel).
+// Primary rays: pixel (i, j), i rightwards and j downwards from the top-left, is the average radiance over
+// its square footprint on the image plane (box filter of width one pixel).
 #pragma once
 
 #include "core/vec.h"

@@ -1,7 +1,8 @@
 // Unidirectional path tracing with next-event estimation and multiple importance sampling (power heuristic),
-// Russian roulette and a maximum depth. Templated on the backend's Tracer (Embree on the CPU, OptiX later), which
-// answers only two questions: the first hit along a ray, and whether a segment is blocked.
-//   struct Tracer { bool intersect(const Ray&, float tmax, Hit*) const; bool occluded(const Ray&, float tmax) const; };
+// Russian roulette and a maximum depth. Templated on the backend's Tracer (Embree on the CPU, OptiX later),
+// which answers only two questions: the first hit along a ray, and whether a segment is blocked.
+//   struct Tracer { bool intersect(const Ray&, float tmax, Hit*) const; bool occluded(const Ray&, float tmax)
+//   const; };
 #pragma once
 
 #include "core/sobol_sampler.h"
@@ -35,7 +36,8 @@ NPT_HD NPT_INLINE bool geometry_agrees(const SurfaceInteraction& si, Vec3 wo, Ve
 // Radiance arriving at the ray origin along `ray`. `sampler` gives this pixel-sample's random numbers, one
 // dimension per decision in a fixed order (so low-discrepancy samplers stratify each decision).
 template <class Tracer, class Sampler>
-NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sampler& sampler, const PathSettings& ps) {
+NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sampler& sampler,
+                      const PathSettings& ps) {
     Rgb radiance(0.0f), throughput(1.0f);
     bool specular_bounce = true;  // the camera ray counts as specular: no MIS on what it sees
     float prev_bsdf_pdf = 0.0f;
@@ -47,8 +49,9 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
             const lights::LightSetView& ls = sv.lights;
             if (ls.environment_light >= 0) {
                 Rgb le = lights::environment_radiance(ls.environment, ray.d);
-                float w = specular_bounce ? 1.0f
-                                          : power_heuristic(prev_bsdf_pdf, lights::environment_light_pdf(ls, ray.d));
+                float w = specular_bounce
+                              ? 1.0f
+                              : power_heuristic(prev_bsdf_pdf, lights::environment_light_pdf(ls, ray.d));
                 radiance += throughput * le * w;
             }
             break;
@@ -82,7 +85,8 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
                     Ray shadow = spawn_ray(si, ls.wi);
                     float tmax = isinf(ls.distance) ? INFINITY : ls.distance * (1.0f - 1e-4f);
                     if (!tracer.occluded(shadow, tmax)) {
-                        float w = ls.is_delta ? 1.0f : power_heuristic(ls.pdf, materials::bsdf_pdf(bsdf, wo, wi));
+                        float w =
+                            ls.is_delta ? 1.0f : power_heuristic(ls.pdf, materials::bsdf_pdf(bsdf, wo, wi));
                         radiance += throughput * f * ls.radiance * (w / ls.pdf);
                     }
                 }

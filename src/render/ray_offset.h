@@ -1,6 +1,6 @@
 // Robust spawn points for secondary rays: move the origin off the surface by a few ulps along the geometric
-// normal (Waechter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems 2019),
-// so rays never re-hit their own triangle and need no scene-scale epsilon.
+// normal (Waechter & Binder, "A Fast and Robust Method for Avoiding Self-Intersection", Ray Tracing Gems
+// 2019), so rays never re-hit their own triangle and need no scene-scale epsilon.
 #pragma once
 
 #include <cstring>

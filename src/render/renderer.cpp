@@ -24,11 +24,13 @@ RenderOptions resolve_options(const scene::Scene& scene, const RenderOptions& op
         throw Error("--res: " + std::to_string(r.width) + "x" + std::to_string(r.height) + " has more than " +
                     std::to_string(k_max_pixels) + " pixels");
     if (!in_range(r.spp, 1, k_max_spp))
-        throw Error("--spp: " + std::to_string(r.spp) + " is out of range (1.." + std::to_string(k_max_spp) + ")");
+        throw Error("--spp: " + std::to_string(r.spp) + " is out of range (1.." + std::to_string(k_max_spp) +
+                    ")");
     if (!in_range(r.max_depth, 0, k_max_depth))
         throw Error("--max-depth: " + std::to_string(r.max_depth) + " is out of range (0.." +
                     std::to_string(k_max_depth) + ")");
-    if (r.threads < 0 || r.threads > 4096) throw Error("--threads: " + std::to_string(r.threads) + " is out of range");
+    if (r.threads < 0 || r.threads > 4096)
+        throw Error("--threads: " + std::to_string(r.threads) + " is out of range");
     if (r.backend != "cpu") {
         if (r.backend == "gpu") throw Error("--backend gpu: the GPU backend is not built in this version");
         throw Error("--backend: unknown backend '" + r.backend + "' (available: cpu)");

@@ -11,12 +11,12 @@
 namespace npt::render {
 
 struct RenderOptions {
-    int width = 0;            // 0: take the scene's setting
+    int width = 0;  // 0: take the scene's setting
     int height = 0;
     int spp = 0;
-    int max_depth = -1;       // -1: the scene's setting
+    int max_depth = -1;  // -1: the scene's setting
     uint64_t seed = 0;
-    int threads = 0;          // 0: all hardware threads
+    int threads = 0;  // 0: all hardware threads
     std::string backend = "cpu";
 };
 

@@ -43,7 +43,8 @@ CameraView make_camera_view(const scene::Scene& scene, int width, int height) {
         c.tan_half_fov_y = std::tan(0.5f * sc.yfov);
         return c;
     }
-    // No camera: look at the scene's bounding box from +Z, far enough to frame it with a 40 degree field of view.
+    // No camera: look at the scene's bounding box from +Z, far enough to frame it with a 40 degree field of
+    // view.
     Vec3 lo(INFINITY), hi(-INFINITY);
     for (const auto& m : scene.meshes)
         for (const Vec3& p : m.positions) {

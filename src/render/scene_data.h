@@ -12,11 +12,11 @@
 namespace npt::render {
 
 class SceneData {
-public:
+  public:
     SceneData(const scene::Scene& scene, int width, int height);
     const SceneView& view() const { return m_view; }
 
-private:
+  private:
     std::vector<MeshView> m_meshes;
     std::vector<MaterialView> m_materials;
     std::vector<TextureView> m_textures;

@@ -8,7 +8,8 @@
 
 namespace npt::render {
 
-// A backend's answer to "what does this ray hit first": Embree/OptiX conventions (u, v weight vertices 1 and 2).
+// A backend's answer to "what does this ray hit first": Embree/OptiX conventions (u, v weight vertices 1 and
+// 2).
 struct Hit {
     float t = 0.0f;
     uint32_t mesh = 0;
@@ -18,12 +19,12 @@ struct Hit {
 
 struct SurfaceInteraction {
     Vec3 p;
-    Vec3 ng;           // unit geometric normal of the front face (CCW winding)
-    Frame shading;     // z = shading normal; for reflective BSDFs flipped to the side of wo
+    Vec3 ng;        // unit geometric normal of the front face (CCW winding)
+    Frame shading;  // z = shading normal; for reflective BSDFs flipped to the side of wo
     Vec2 uv;
-    bool front_face;   // the ray arrived on the front side
+    bool front_face;  // the ray arrived on the front side
     materials::Bsdf bsdf;
-    Rgb emission;      // radiance emitted towards the ray origin (front face only unless double-sided)
+    Rgb emission;  // radiance emitted towards the ray origin (front face only unless double-sided)
 };
 
 NPT_HD NPT_INLINE Rgba lookup(const SceneView& sv, int32_t texture, Vec2 uv) {
@@ -31,7 +32,8 @@ NPT_HD NPT_INLINE Rgba lookup(const SceneView& sv, int32_t texture, Vec2 uv) {
     return sv.textures[size_t(texture)].sample(uv);
 }
 
-NPT_HD NPT_INLINE SurfaceInteraction make_surface_interaction(const SceneView& sv, const Hit& hit, const Ray& ray) {
+NPT_HD NPT_INLINE SurfaceInteraction make_surface_interaction(const SceneView& sv, const Hit& hit,
+                                                              const Ray& ray) {
     const MeshView& mesh = sv.meshes[hit.mesh];
     const MaterialView& mat = sv.materials[mesh.material];
     uint32_t i0 = mesh.indices[3 * hit.prim], i1 = mesh.indices[3 * hit.prim + 1],
@@ -62,7 +64,8 @@ NPT_HD NPT_INLINE SurfaceInteraction make_surface_interaction(const SceneView& s
     }
 
     if (mat.normal_texture >= 0 && mesh.uvs) {
-        // Tangent frame from the uv parametrisation; glTF's v runs down the image, so the bitangent follows -dp/dv.
+        // Tangent frame from the uv parametrisation; glTF's v runs down the image, so the bitangent follows
+        // -dp/dv.
         Vec2 duv1 = uv1 - uv0, duv2 = uv2 - uv0;
         float det = duv1.x * duv2.y - duv1.y * duv2.x;
         if (fabsf(det) > 1e-12f) {
@@ -90,10 +93,11 @@ NPT_HD NPT_INLINE SurfaceInteraction make_surface_interaction(const SceneView& s
         roughness *= mr.g;
         metallic *= mr.b;
     }
-    si.bsdf = materials::make_bsdf(base, metallic, roughness, mat.specular, mat.specular_color, mat.transmission,
-                                   mat.ior);
+    si.bsdf = materials::make_bsdf(base, metallic, roughness, mat.specular, mat.specular_color,
+                                   mat.transmission, mat.ior);
 
-    // Reflective BSDFs shade both faces alike; transmissive ones need the true front to know inside from outside.
+    // Reflective BSDFs shade both faces alike; transmissive ones need the true front to know inside from
+    // outside.
     if (!materials::bsdf_has_transmission(si.bsdf) && !si.front_face) ns = -ns;
     si.shading = Frame::from_z(ns);
 

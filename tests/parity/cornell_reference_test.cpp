@@ -1,13 +1,14 @@
-// Our render of the shared Cornell scene against Blender Cycles' 4512 spp reference (../shared/data/scenes/cornell).
+// Our render of the shared Cornell scene against Blender Cycles' 4512 spp reference
+// (../shared/data/scenes/cornell).
 //
-// Tolerance derivation. We render two independent halves a, b (different seeds) and compare their mean m with the
-// reference r. Per pixel and channel, E[(m - r)^2] = Var(m) + Var(r) + bias^2, and (a - b)^2 / 4 is an unbiased
-// estimate of Var(m). So d = (m - r)^2 w - (a - b)^2 w / 4, with w = 1 / (r^2 + 0.01), has expectation
-// Var(r) w + bias^2 w: averaged over the image that is the reference's own relMSE (measured by the data's authors
-// from its two halves and stated in reference.json) plus our bias. We require mean(d) <= ref_rel_mse + 4 SE(d), with
-// SE(d) the standard error of mean(d) over the pixels: a renderer with a bias much larger than the noise fails.
-// The per-channel image means must agree within 4 combined standard errors (ours from a, b; the reference's from
-// its stated per-channel MSE, treating pixels as independent).
+// Tolerance derivation. We render two independent halves a, b (different seeds) and compare their mean m with
+// the reference r. Per pixel and channel, E[(m - r)^2] = Var(m) + Var(r) + bias^2, and (a - b)^2 / 4 is an
+// unbiased estimate of Var(m). So d = (m - r)^2 w - (a - b)^2 w / 4, with w = 1 / (r^2 + 0.01), has
+// expectation Var(r) w + bias^2 w: averaged over the image that is the reference's own relMSE (measured by
+// the data's authors from its two halves and stated in reference.json) plus our bias. We require mean(d) <=
+// ref_rel_mse + 4 SE(d), with SE(d) the standard error of mean(d) over the pixels: a renderer with a bias
+// much larger than the noise fails. The per-channel image means must agree within 4 combined standard errors
+// (ours from a, b; the reference's from its stated per-channel MSE, treating pixels as independent).
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -56,8 +57,8 @@ void check_against_reference(const ReferenceCase& c) {
     for (size_t k = 0; k < 3; ++k) {
         double ref_se = std::sqrt(mse[k].get<double>() * double(n)) / double(n);
         double se = std::sqrt(noise.mean_stderr[k] * noise.mean_stderr[k] + ref_se * ref_se);
-        std::printf("channel %zu: mean %.5f vs %.5f (rel %.2e, 4 SE %.2e)\n", k, cmp.mean_test[k], cmp.mean_ref[k],
-                    cmp.mean_rel_err[k], 4 * se / cmp.mean_ref[k]);
+        std::printf("channel %zu: mean %.5f vs %.5f (rel %.2e, 4 SE %.2e)\n", k, cmp.mean_test[k],
+                    cmp.mean_ref[k], cmp.mean_rel_err[k], 4 * se / cmp.mean_ref[k]);
         EXPECT_LE(std::abs(cmp.mean_test[k] - cmp.mean_ref[k]), 4.0 * se) << "channel " << k;
     }
 }

@@ -8,9 +8,9 @@
 namespace npt {
 namespace {
 
-// The first 2^m points of an Owen-scrambled 2D Sobol sequence form a (0, m, 2)-net: every elementary interval of
-// area 2^-m (here 1x64, 2x32, ..., 64x1 grids) holds exactly one point. A wrong direction number, a scramble that
-// breaks nesting or a shuffle that is not a permutation of the index all violate this.
+// The first 2^m points of an Owen-scrambled 2D Sobol sequence form a (0, m, 2)-net: every elementary interval
+// of area 2^-m (here 1x64, 2x32, ..., 64x1 grids) holds exactly one point. A wrong direction number, a
+// scramble that breaks nesting or a shuffle that is not a permutation of the index all violate this.
 TEST(SobolSampler, EachScrambledPairIsA02Net) {
     const int n = 64;
     for (uint32_t px : {0u, 17u, 1234u})
@@ -30,7 +30,8 @@ TEST(SobolSampler, EachScrambledPairIsA02Net) {
                 int by = n / bx;
                 std::set<int> cells;
                 for (Vec2 p : pts) cells.insert(int(p.x * float(bx)) * by + int(p.y * float(by)));
-                EXPECT_EQ(int(cells.size()), n) << "grid " << bx << "x" << by << " pixel " << px << " pair " << dim;
+                EXPECT_EQ(int(cells.size()), n)
+                    << "grid " << bx << "x" << by << " pixel " << px << " pair " << dim;
             }
         }
 }

@@ -1,4 +1,5 @@
-// The `volume` cube of cornell_volume is a placeholder for a NeRF: it is loaded and reported, never hit by rays.
+// The `volume` cube of cornell_volume is a placeholder for a NeRF: it is loaded and reported, never hit by
+// rays.
 #include <gtest/gtest.h>
 
 #include "render/cpu/embree_scene.h"

@@ -1,5 +1,5 @@
-// The CPU backend: Embree for rays, TBB over 16x16 tiles, one RNG stream per pixel (so the image depends on the
-// seed only, never on the thread count or the order tiles run in).
+// The CPU backend: Embree for rays, TBB over 16x16 tiles, one RNG stream per pixel (so the image depends on
+// the seed only, never on the thread count or the order tiles run in).
 #pragma once
 
 #include "render/renderer.h"

@@ -19,7 +19,9 @@ void embree_error(void*, RTCError code, const char* message) {
 
 EmbreeScene::EmbreeScene(const scene::Scene& scene) {
     m_device = rtcNewDevice(nullptr);
-    if (!m_device) throw Error("Embree: could not create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+    if (!m_device)
+        throw Error("Embree: could not create a device (error " +
+                    std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
     rtcSetDeviceErrorFunction(m_device, embree_error, nullptr);
     m_scene = rtcNewScene(m_device);
     rtcSetSceneBuildQuality(m_scene, RTC_BUILD_QUALITY_HIGH);
@@ -28,10 +30,10 @@ EmbreeScene::EmbreeScene(const scene::Scene& scene) {
         const scene::Mesh& mesh = scene.meshes[i];
         RTCGeometry geom = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_TRIANGLE);
         // Copied into Embree-owned buffers: Embree needs 16-byte readable padding past the last vertex.
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                              3 * sizeof(float), mesh.positions.size()));
-        auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                   3 * sizeof(uint32_t), mesh.triangle_count()));
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+            geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
+        auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+            geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangle_count()));
         if (!v || !idx) throw Error("Embree: out of memory for mesh '" + mesh.name + "'");
         std::memcpy(v, mesh.positions.data(), mesh.positions.size() * sizeof(Vec3));
         std::memcpy(idx, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));

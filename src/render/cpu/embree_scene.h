@@ -1,5 +1,6 @@
-// The CPU backend's ray queries: one Embree 3 triangle geometry per scene mesh (geomID = mesh index), committed
-// once; EmbreeTracer answers the integrator's two questions (first hit, segment blocked) for one ray at a time.
+// The CPU backend's ray queries: one Embree 3 triangle geometry per scene mesh (geomID = mesh index),
+// committed once; EmbreeTracer answers the integrator's two questions (first hit, segment blocked) for one
+// ray at a time.
 #pragma once
 
 #include <embree3/rtcore.h>
@@ -10,7 +11,7 @@
 namespace npt::render::cpu {
 
 class EmbreeScene {
-public:
+  public:
     explicit EmbreeScene(const scene::Scene& scene);
     ~EmbreeScene();
     EmbreeScene(const EmbreeScene&) = delete;
@@ -18,13 +19,13 @@ public:
 
     RTCScene handle() const { return m_scene; }
 
-private:
+  private:
     RTCDevice m_device = nullptr;
     RTCScene m_scene = nullptr;
 };
 
 class EmbreeTracer {
-public:
+  public:
     explicit EmbreeTracer(const EmbreeScene& scene) : m_scene(scene.handle()) {}
 
     bool intersect(const Ray& ray, float tmax, Hit* hit) const {
@@ -75,7 +76,7 @@ public:
         return r.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
     }
 
-private:
+  private:
     RTCScene m_scene;
 };
 

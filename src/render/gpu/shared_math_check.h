@@ -1,5 +1,5 @@
-// Runs the shared NPT_HD math (BSDFs, light sampling, camera rays) on the GPU for a batch of inputs, so a test can
-// compare it with the same functions on the CPU. Plain C++ interface: callers need no CUDA headers.
+// Runs the shared NPT_HD math (BSDFs, light sampling, camera rays) on the GPU for a batch of inputs, so a
+// test can compare it with the same functions on the CPU. Plain C++ interface: callers need no CUDA headers.
 #pragma once
 
 #include <vector>
@@ -44,6 +44,7 @@ struct LightResult {
     lights::LightSample sample;
 };
 // `lights` points at host memory; its arrays are copied to the device for the run.
-std::vector<LightResult> run_light_cases(const lights::LightSetView& lights, const std::vector<LightCase>& cases);
+std::vector<LightResult> run_light_cases(const lights::LightSetView& lights,
+                                         const std::vector<LightCase>& cases);
 
 }  // namespace npt::gpu
