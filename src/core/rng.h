@@ -1,5 +1,5 @@
-// Deterministic random numbers: a PCG32 stream per (seed, pixel, sample), so that an image depends only on the
-// seed and never on the thread count or the tile order.
+// Deterministic random numbers: a PCG32 stream per (seed, pixel, sample), so that an image depends only on
+// the seed and never on the thread count or the tile order.
 #pragma once
 
 #include <cstdint>
@@ -20,14 +20,15 @@ NPT_HD NPT_INLINE uint64_t mix64(uint64_t k) {
 }
 
 class Pcg32 {
-public:
+  public:
     NPT_HD Pcg32() = default;
     NPT_HD Pcg32(uint64_t seed, uint64_t stream) { set_sequence(seed, stream); }
 
     // One stream per pixel and sample index; `seed` is the user's --seed.
     NPT_HD static Pcg32 for_pixel(uint64_t seed, uint32_t px, uint32_t py, uint32_t sample) {
         uint64_t pixel = (uint64_t(py) << 32) | px;
-        return Pcg32(mix64(seed ^ mix64(pixel)), mix64(pixel + 0x9e3779b97f4a7c15ULL * (uint64_t(sample) + 1)));
+        return Pcg32(mix64(seed ^ mix64(pixel)),
+                     mix64(pixel + 0x9e3779b97f4a7c15ULL * (uint64_t(sample) + 1)));
     }
 
     NPT_HD void set_sequence(uint64_t seed, uint64_t stream) {
@@ -48,12 +49,13 @@ public:
 
     // Uniform in [0, 1): 24 random mantissa bits, never 1.
     NPT_HD float next_float() { return float(next_u32() >> 8) * 0x1p-24f; }
+    NPT_HD float next_1d() { return next_float(); }  // the sampler interface the integrator uses
     NPT_HD Vec2 next_2d() {
         float a = next_float();
         return {a, next_float()};
     }
 
-private:
+  private:
     uint64_t m_state = 0x853c49e6748fea9bULL;
     uint64_t m_inc = 0xda3e39cb94b95bdbULL;
 };

@@ -14,7 +14,12 @@
 
 namespace npt::render {
 
+// How direct light is found. Mis is the renderer's default; the other two exist to check it (all three
+// converge to the same image) and to debug a scene.
+enum class LightStrategy : uint8_t { Mis, BsdfOnly, LightOnly };
+
 struct PathSettings {
+    LightStrategy strategy = LightStrategy::Mis;
     int max_depth = 16;      // the most scattering events on a path; emission after the last one still counts
     int rr_start_depth = 3;  // Russian roulette starts after this many bounces
 };
@@ -49,9 +54,11 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
             const lights::LightSetView& ls = sv.lights;
             if (ls.environment_light >= 0) {
                 Rgb le = lights::environment_radiance(ls.environment, ray.d);
-                float w = specular_bounce
-                              ? 1.0f
-                              : power_heuristic(prev_bsdf_pdf, lights::environment_light_pdf(ls, ray.d));
+                float w = 1.0f;
+                if (!specular_bounce && ps.strategy == LightStrategy::LightOnly)
+                    w = 0.0f;
+                else if (!specular_bounce && ps.strategy == LightStrategy::Mis)
+                    w = power_heuristic(prev_bsdf_pdf, lights::environment_light_pdf(ls, ray.d));
                 radiance += throughput * le * w;
             }
             break;
@@ -61,7 +68,11 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
         Vec3 wo_world = -ray.d;
         if (!is_black(si.emission)) {
             float w = 1.0f;
-            if (!specular_bounce) {
+            if (!specular_bounce && ps.strategy == LightStrategy::LightOnly) {
+                // An emitter that could not have been light-sampled (zero pdf) is only found this way.
+                w = lights::triangle_light_pdf(sv.lights, hit.mesh, hit.prim, prev_p, si.p) > 0.0f ? 0.0f
+                                                                                                   : 1.0f;
+            } else if (!specular_bounce && ps.strategy == LightStrategy::Mis) {
                 float light_pdf = lights::triangle_light_pdf(sv.lights, hit.mesh, hit.prim, prev_p, si.p);
                 w = power_heuristic(prev_bsdf_pdf, light_pdf);
             }
@@ -73,7 +84,7 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
         Vec3 wo = si.shading.to_local(wo_world);
 
         // Next-event estimation: one light sample, weighted against the BSDF strategy.
-        if (!materials::bsdf_is_delta(bsdf)) {
+        if (!materials::bsdf_is_delta(bsdf) && ps.strategy != LightStrategy::BsdfOnly) {
             lights::LightSample ls;
             float u_select = sampler.next_1d();
             Vec2 u_light = sampler.next_2d();
@@ -85,8 +96,9 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
                     Ray shadow = spawn_ray(si, ls.wi);
                     float tmax = isinf(ls.distance) ? INFINITY : ls.distance * (1.0f - 1e-4f);
                     if (!tracer.occluded(shadow, tmax)) {
-                        float w =
-                            ls.is_delta ? 1.0f : power_heuristic(ls.pdf, materials::bsdf_pdf(bsdf, wo, wi));
+                        float w = ls.is_delta || ps.strategy == LightStrategy::LightOnly
+                                      ? 1.0f
+                                      : power_heuristic(ls.pdf, materials::bsdf_pdf(bsdf, wo, wi));
                         radiance += throughput * f * ls.radiance * (w / ls.pdf);
                     }
                 }
