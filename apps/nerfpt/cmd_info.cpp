@@ -16,7 +16,10 @@ using scene::Scene;
 // Long lists are cut here: `info` is for a quick look, not a dump.
 constexpr size_t k_max_listed = 24;
 
-std::string vec(Vec3 v) { return fmt::format("({:.3g}, {:.3g}, {:.3g})", v.x, v.y, v.z); }
+// + 0.0f turns -0 into 0, which reads better.
+std::string vec(Vec3 v) {
+    return fmt::format("({:.3g}, {:.3g}, {:.3g})", v.x + 0.0f, v.y + 0.0f, v.z + 0.0f);
+}
 float degrees(float radians) { return radians * 180.0f / k_pi; }
 
 std::string texture_name(const Scene& s, int index) {
