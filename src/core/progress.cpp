@@ -69,7 +69,6 @@ Progress::~Progress() {
 
 void Progress::update(uint64_t done, uint64_t total) {
     if (m_settings.style == ProgressSettings::Style::Silent) return;
-    m_seen_done.store(done, std::memory_order_relaxed);
     m_seen_total.store(total, std::memory_order_relaxed);
     if (done < m_next_done.load(std::memory_order_relaxed)) return;
     const double now = m_clock();
@@ -85,7 +84,9 @@ void Progress::finish() {
         m_finished = true;
         return;
     }
-    print(m_seen_done.load(), m_seen_total.load(), m_clock(), true);
+    // Finished means all the work is done, whichever thread's update came last.
+    const uint64_t total = m_seen_total.load();
+    print(total, total, m_clock(), true);
     m_finished = true;
 }
 

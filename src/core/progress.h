@@ -62,8 +62,7 @@ class Progress {
     // m_next_done.
     std::atomic<double> m_next_time{0.0};
     std::atomic<uint64_t> m_next_done{0};
-    // The latest update's numbers, so that finish() can report them even when that update printed nothing.
-    std::atomic<uint64_t> m_seen_done{0};
+    // The latest total, for finish(), even when no update printed.
     std::atomic<uint64_t> m_seen_total{0};
     std::mutex m_print_mutex;
     bool m_finished = false;
