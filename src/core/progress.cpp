@@ -70,7 +70,8 @@ Progress::~Progress() {
 void Progress::update(uint64_t done, uint64_t total) {
     if (m_settings.style == ProgressSettings::Style::Silent) return;
     m_seen_total.store(total, std::memory_order_relaxed);
-    if (done < m_next_done.load(std::memory_order_relaxed)) return;
+    // The last update (done == total) is left to finish(), which prints 100% with the total time.
+    if (done < m_next_done.load(std::memory_order_relaxed) || (total > 0 && done >= total)) return;
     const double now = m_clock();
     if (now < m_next_time.load(std::memory_order_relaxed)) return;
     std::unique_lock lock(m_print_mutex, std::try_to_lock);
