@@ -1,2 +1,70 @@
+// The nerfpt command line: global options, one subcommand per file (cmd_*.cpp), and the one place where
+// errors become a single line on stderr and an exit code (0 ok, 1 error, 2 usage error, 128+signal when
+// interrupted).
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
 #include <cstdio>
-int main() { std::puts("nerfpt"); return 0; }
+#include <exception>
+
+#include "cmd_info.h"
+#include "cmd_render.h"
+#include "common.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "interrupt.h"
+
+namespace {
+
+constexpr int k_exit_error = 1;
+constexpr int k_exit_usage = 2;
+
+void print_error(const char* message) { fmt::print(stderr, "nerfpt: error: {}\n", message); }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    using namespace npt::cli;
+    InterruptGuard interrupts;  // first: every thread started later inherits the blocked signals
+
+    CLI::App app("nerfpt: a path tracer for glTF scenes that will render NeRFs inside them.", "nerfpt");
+    app.footer("Run 'nerfpt SUBCOMMAND --help' for the options of each subcommand.");
+    app.set_version_flag("--version", std::string("nerfpt ") + k_version, "Print the version and exit");
+    app.require_subcommand(1, 1);
+    GlobalSettings global;
+    app.add_flag("-v,--verbose", global.verbose, "Print debug messages (loading details, timings)");
+    app.add_flag("-q,--quiet", global.quiet, "Print errors only: no progress, no info messages")
+        ->excludes(app.get_option("--verbose"));
+    RenderArgs render_args;
+    CLI::App* render_cmd = add_render_command(app, render_args);
+    InfoArgs info_args;
+    CLI::App* info_cmd = add_info_command(app, info_args);
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        print_error((std::string(e.what()) + " (see 'nerfpt --help')").c_str());
+        return k_exit_usage;
+    }
+
+    npt::init_logging(global.verbosity());
+    try {
+        if (render_cmd->parsed()) return run_render(render_args, global, interrupts);
+        if (info_cmd->parsed()) return run_info(info_args, global);
+    } catch (const npt::Error& e) {
+        print_error(e.what());
+        return k_exit_error;
+    } catch (const std::exception& e) {
+        // Not one of ours (bad_alloc, a library's exception): still one line, with its type unspoken.
+        print_error(e.what());
+        return k_exit_error;
+    }
+    return k_exit_usage;  // unreachable: require_subcommand(1, 1) guarantees one of the above
+}

@@ -1,0 +1,170 @@
+#include "cmd_render.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/progress.h"
+#include "interrupt.h"
+#include "render/renderer.h"
+#include "scene/scene.h"
+
+namespace npt::cli {
+namespace fs = std::filesystem;
+
+void parse_resolution(const std::string& text, int* width, int* height) {
+    const auto bad = [&](const std::string& why) { return Error("'" + text + "' " + why); };
+    const size_t x = text.find('x');
+    if (x == std::string::npos || x == 0 || x + 1 == text.size())
+        throw bad("is not WIDTHxHEIGHT (for example 640x480)");
+    const auto side = [&](std::string_view s) {
+        if (s.size() > 6 || !std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; }))
+            throw bad("is not WIDTHxHEIGHT with positive whole numbers (for example 640x480)");
+        const int v = std::stoi(std::string(s));
+        if (v < 1 || v > render::k_max_resolution)
+            throw bad("is out of range: each side must be 1.." + std::to_string(render::k_max_resolution));
+        return v;
+    };
+    *width = side(std::string_view(text).substr(0, x));
+    *height = side(std::string_view(text).substr(x + 1));
+    if (static_cast<long long>(*width) * *height > render::k_max_pixels)
+        throw bad("has more than " + std::to_string(render::k_max_pixels) + " pixels");
+}
+
+CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
+    CLI::App* cmd =
+        app.add_subcommand("render", "Render a scene to a linear OpenEXR image and an sRGB PNG preview");
+    cmd->footer(
+        "Options left out take the scene's own settings (glTF scene extras or the JSON scene's \"render\"),\n"
+        "then the defaults 640x480, 64 spp, max depth 16, seed 0.\n"
+        "Example: nerfpt render scenes/example/scene.gltf -o out/example.exr --spp 256 --res 1280x960");
+    cmd->add_option("SCENE", args.scene, "Scene file: .gltf, .glb, .obj or .json (docs/formats.md)")
+        ->required();
+    cmd->add_option("-o,--output", args.output,
+                    "Output image, must end in .exr and its folder must exist; OUT.png (sRGB preview) is "
+                    "written beside it")
+        ->required();
+    cmd->add_option(
+           "--spp", args.spp,
+           "Samples per pixel, 1.." + std::to_string(render::k_max_spp) + " (default: the scene's, else 64)")
+        ->check(CLI::Range(1, render::k_max_spp));
+    cmd->add_option("--res", args.res,
+                    "Image size in pixels, WIDTHxHEIGHT such as 640x480, each side 1.." +
+                        std::to_string(render::k_max_resolution) + " (default: the scene's, else 640x480)")
+        ->check(CLI::Validator(
+            [](std::string& text) {
+                int w = 0, h = 0;
+                try {
+                    parse_resolution(text, &w, &h);
+                } catch (const Error& e) {
+                    return std::string(e.what());
+                }
+                return std::string();
+            },
+            "WxH"));
+    cmd->add_option("--max-depth", args.max_depth,
+                    "Longest path in bounces, 0.." + std::to_string(render::k_max_depth) +
+                        "; 0 shows emitters only (default: the scene's, else 16)")
+        ->check(CLI::Range(0, render::k_max_depth));
+    cmd->add_option("--seed", args.seed,
+                    "Random seed, a whole number >= 0; the same seed gives the same image "
+                    "(default: the scene's, else 0)")
+        ->each([&args](const std::string&) { args.seed_given = true; });
+    cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads (default: 0)")
+        ->check(CLI::Range(0, 4096));
+    cmd->add_option("--backend", args.backend,
+                    "Renderer: cpu (Embree + TBB); gpu is not built yet (default: cpu)")
+        ->check(CLI::Validator(
+            [](std::string& name) {
+                if (name == "cpu" || name == "gpu") return std::string();
+                return "unknown backend '" + name + "' (available: cpu)";
+            },
+            "cpu|gpu"));
+    cmd->add_option("--camera", args.camera,
+                    "Camera to render from, by glTF node or camera name (default: the scene's first camera)");
+    cmd->add_option(
+           "--exposure", args.exposure,
+           "PNG only: multiply by 2^STOPS before the sRGB curve and clamp, -20..20 (default: 0); the "
+           "EXR is always unscaled")
+        ->check(CLI::Range(-20.0f, 20.0f));
+    return cmd;
+}
+
+namespace {
+
+// Refuses an output we could not write, before minutes of rendering are spent.
+void check_output(const fs::path& out) {
+    std::string ext = out.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext != ".exr")
+        throw Error("--output '" + out.string() + "': must end in .exr (a PNG preview is written beside it)");
+    if (out.filename() == ".exr") throw Error("--output '" + out.string() + "': needs a file name");
+    const fs::path dir = out.parent_path().empty() ? fs::path(".") : out.parent_path();
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec))
+        throw Error("--output '" + out.string() + "': folder '" + dir.string() +
+                    "' does not exist (create it first)");
+    if (access(dir.c_str(), W_OK) != 0)
+        throw Error("--output '" + out.string() + "': folder '" + dir.string() + "' is not writable");
+    if (fs::is_directory(out, ec)) throw Error("--output '" + out.string() + "': is a folder");
+}
+
+}  // namespace
+
+int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    if (args.backend == "gpu") throw Error("--backend gpu: the GPU backend is not built in this version");
+    const fs::path out_exr = args.output;
+    fs::path out_png = out_exr;
+    out_png.replace_extension(".png");
+    check_output(out_exr);
+
+    render::RenderOptions options;
+    if (!args.res.empty()) parse_resolution(args.res, &options.width, &options.height);
+    options.spp = args.spp;
+    options.max_depth = args.max_depth;
+    options.threads = args.threads;
+    options.backend = args.backend;
+
+    const auto t_load = std::chrono::steady_clock::now();
+    scene::LoadOptions load;
+    load.camera_name = args.camera;
+    const scene::Scene scene = scene::load_scene(args.scene, load);
+    options.seed = args.seed_given ? args.seed : scene.settings.seed;
+    const render::RenderOptions resolved = render::resolve_options(scene, options);
+    spdlog::debug("loaded {} in {:.2f} s: {} meshes, {} triangles", args.scene,
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count(),
+                  scene.meshes.size(), scene.triangle_count());
+    spdlog::info("rendering {}x{}, {} spp, max depth {}, seed {}, backend {}", resolved.width,
+                 resolved.height, resolved.spp, resolved.max_depth, resolved.seed, resolved.backend);
+
+    ProgressSettings ps;
+    ps.style = progress_style(stream_is_tty(stderr), global.quiet);
+    Progress progress(ps, std::cerr);
+    const auto t0 = std::chrono::steady_clock::now();
+    const Image image = render::render(
+        scene, resolved, [&progress](uint64_t done, uint64_t total) { progress.update(done, total); });
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    progress.finish();
+
+    {
+        auto no_interrupt = interrupts.hold();  // both files complete, or an interrupt waits for them
+        write_exr(out_exr, image);
+        write_png(out_png, image, args.exposure);
+    }
+    const double samples = double(resolved.width) * resolved.height * resolved.spp;
+    fmt::print("wrote {}\nwrote {}\n", out_exr.string(), out_png.string());
+    fmt::print("rendered {}x{} at {} spp in {} ({} samples/s)\n", resolved.width, resolved.height,
+               resolved.spp, format_seconds(seconds), format_count(seconds > 0 ? samples / seconds : 0.0));
+    return 0;
+}
+
+}  // namespace npt::cli

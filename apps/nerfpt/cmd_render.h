@@ -1,0 +1,32 @@
+// `nerfpt render`: load a scene, render it on the chosen backend, write linear EXR plus a tonemapped PNG.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <cstdint>
+#include <string>
+
+#include "common.h"
+
+namespace npt::cli {
+
+struct RenderArgs {
+    std::string scene;
+    std::string output;
+    int spp = 0;         // 0: the scene's setting
+    std::string res;     // "WxH"; empty: the scene's setting
+    int max_depth = -1;  // -1: the scene's setting
+    uint64_t seed = 0;
+    bool seed_given = false;
+    int threads = 0;
+    std::string backend = "cpu";
+    std::string camera;
+    float exposure = 0.0f;
+};
+
+// Parses "640x480" strictly: digits only, each side in 1..render::k_max_resolution. Throws npt::Error.
+void parse_resolution(const std::string& text, int* width, int* height);
+
+CLI::App* add_render_command(CLI::App& app, RenderArgs& args);
+int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts);
+
+}  // namespace npt::cli

@@ -1,0 +1,34 @@
+// Ctrl-C (SIGINT) and SIGTERM handling for the whole program. Signals are blocked in every thread and taken
+// by one watcher thread, which prints a message and exits at once; while files are being written it waits
+// until they are complete, so an interrupt never leaves a half-written output.
+#pragma once
+
+#include <signal.h>
+
+#include <mutex>
+#include <thread>
+
+namespace npt::cli {
+
+class InterruptGuard {
+  public:
+    // Construct first in main(), before any other thread exists: threads inherit the blocked signal mask, so
+    // the watcher is the only thread that ever sees SIGINT/SIGTERM.
+    InterruptGuard();
+    ~InterruptGuard();
+    InterruptGuard(const InterruptGuard&) = delete;
+    InterruptGuard& operator=(const InterruptGuard&) = delete;
+
+    // While the returned lock lives, an interrupt is held back (it takes effect when the lock is released).
+    std::unique_lock<std::mutex> hold() { return std::unique_lock(m_mutex); }
+
+  private:
+    void watch(std::stop_token stop);
+
+    sigset_t m_signals{};
+    sigset_t m_old_mask{};
+    std::mutex m_mutex;
+    std::jthread m_watcher;
+};
+
+}  // namespace npt::cli

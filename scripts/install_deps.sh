@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages nerfpt needs to build and test. Checks with dpkg first, so a re-run installs
+# nothing and does not touch the network; runs `apt-get update` only when something is missing. Works as a
+# normal user when everything is installed; otherwise it names the packages to install (or use sudo).
+set -euo pipefail
+
+packages=(
+    cmake ninja-build g++ pkg-config git
+    libembree-dev libtbb-dev
+    libtinygltf-dev libtinyobjloader-dev libopenexr-dev libstb-dev nlohmann-json3-dev
+    libcli11-dev libspdlog-dev libfmt-dev
+    libgtest-dev libgmock-dev libbenchmark-dev
+    libeigen3-dev
+    python3
+)
+
+missing=()
+for p in "${packages[@]}"; do
+    # "install ok installed" is the only state in which the package's files are all there.
+    if [[ "$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)" != "install ok installed" ]]; then
+        missing+=("$p")
+    fi
+done
+
+if [[ ${#missing[@]} -eq 0 ]]; then
+    echo "install_deps: all ${#packages[@]} packages are installed"
+    exit 0
+fi
+
+echo "install_deps: missing: ${missing[*]}"
+if [[ $(id -u) -ne 0 ]]; then
+    if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+        sudo_cmd=(sudo)
+    else
+        echo "install_deps: not root; install them with:" >&2
+        echo "  sudo apt-get update && sudo apt-get install -y --no-install-recommends ${missing[*]}" >&2
+        exit 1
+    fi
+else
+    sudo_cmd=()
+fi
+
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -q
+"${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+echo "install_deps: installed ${#missing[@]} packages"

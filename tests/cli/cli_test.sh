@@ -1,0 +1,95 @@
+#!/usr/bin/env bash
+# Command-line behaviour of the nerfpt binary: help texts, exit codes and one-line error messages.
+# Usage: tests/cli/cli_test.sh path/to/nerfpt   (ctest passes the built binary)
+set -euo pipefail
+
+nerfpt=${1:?usage: cli_test.sh path/to/nerfpt}
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+scene="$here/../../scenes/example/scene.gltf"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+failures=0
+
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# run ARGS...: runs nerfpt, leaving the exit code in $rc and the outputs in $tmp/out, $tmp/err.
+run() {
+    rc=0
+    "$nerfpt" "$@" >"$tmp/out" 2>"$tmp/err" || rc=$?
+}
+
+# expect_error CODE PATTERN ARGS...: exit code CODE, exactly one line on stderr, matching PATTERN (grep -E).
+expect_error() {
+    local code=$1 pattern=$2
+    shift 2
+    run "$@"
+    local what="nerfpt $*"
+    [[ $rc -eq $code ]] || fail "$what: exit code $rc, expected $code"
+    [[ $(wc -l <"$tmp/err") -eq 1 ]] || fail "$what: expected one line on stderr, got: $(cat "$tmp/err")"
+    grep -qE "^nerfpt: error: " "$tmp/err" || fail "$what: stderr does not start with 'nerfpt: error: '"
+    grep -qE -- "$pattern" "$tmp/err" || fail "$what: stderr does not match '$pattern': $(cat "$tmp/err")"
+}
+
+# --help mentions every option of each command.
+run --help
+[[ $rc -eq 0 ]] || fail "--help: exit code $rc"
+for opt in --version --verbose --quiet render info; do
+    grep -q -- "$opt" "$tmp/out" || fail "nerfpt --help does not mention $opt"
+done
+run render --help
+[[ $rc -eq 0 ]] || fail "render --help: exit code $rc"
+for opt in SCENE --output --spp --res --max-depth --seed --threads --backend --camera --exposure; do
+    grep -q -- "$opt" "$tmp/out" || fail "nerfpt render --help does not mention $opt"
+done
+run info --help
+[[ $rc -eq 0 ]] || fail "info --help: exit code $rc"
+for opt in SCENE --camera; do
+    grep -q -- "$opt" "$tmp/out" || fail "nerfpt info --help does not mention $opt"
+done
+run --version
+if [[ $rc -ne 0 ]] || ! grep -qE '^nerfpt [0-9]+\.[0-9]+' "$tmp/out"; then
+    fail "--version: exit code $rc, '$(cat "$tmp/out")'"
+fi
+
+# Usage errors: exit code 2.
+expect_error 2 "subcommand"
+expect_error 2 "--output" render "$scene"
+expect_error 2 "--res" render "$scene" -o "$tmp/a.exr" --res 0x0
+expect_error 2 "--res" render "$scene" -o "$tmp/a.exr" --res abc
+expect_error 2 "--res" render "$scene" -o "$tmp/a.exr" --res 100000x10
+expect_error 2 "--res" render "$scene" -o "$tmp/a.exr" --res -5x10
+expect_error 2 "--res" render "$scene" -o "$tmp/a.exr" --res 64x
+expect_error 2 "--spp" render "$scene" -o "$tmp/a.exr" --spp 0
+expect_error 2 "--max-depth" render "$scene" -o "$tmp/a.exr" --max-depth -3
+expect_error 2 "unknown backend 'vulkan'" render "$scene" -o "$tmp/a.exr" --backend vulkan
+
+# Errors a user can act on: exit code 1, one line naming the thing.
+expect_error 1 "missing\.gltf" render "$tmp/missing.gltf" -o "$tmp/a.exr"
+expect_error 1 "missing\.gltf" info "$tmp/missing.gltf"
+expect_error 1 "GPU backend is not built" render "$scene" -o "$tmp/a.exr" --backend gpu
+expect_error 1 "no_such_folder.*does not exist" render "$scene" -o "$tmp/no_such_folder/a.exr"
+expect_error 1 "\.exr" render "$scene" -o "$tmp/a.png"
+expect_error 1 "camera 'nope'" info "$scene" --camera nope
+
+# The output checks come before the scene is loaded: a missing scene and a bad output report the output.
+expect_error 1 "no_such_folder" render "$tmp/missing.gltf" -o "$tmp/no_such_folder/a.exr"
+
+# A tiny render works and writes both files.
+run -q render "$scene" -o "$tmp/small.exr" --res 16x12 --spp 1 --threads 1
+[[ $rc -eq 0 ]] || fail "tiny render: exit code $rc: $(cat "$tmp/err")"
+[[ -s "$tmp/small.exr" && -s "$tmp/small.png" ]] || fail "tiny render: small.exr / small.png not written"
+grep -q "16x12" "$tmp/out" || fail "tiny render: summary does not name the resolution: $(cat "$tmp/out")"
+[[ ! -s "$tmp/err" ]] || fail "tiny render with -q wrote to stderr: $(cat "$tmp/err")"
+
+# info describes the example scene.
+run info "$scene"
+[[ $rc -eq 0 ]] || fail "info: exit code $rc: $(cat "$tmp/err")"
+for word in meshes materials lights spot camera volumes nerf_volume render; do
+    grep -q "$word" "$tmp/out" || fail "info does not mention '$word'"
+done
+
+if [[ $failures -gt 0 ]]; then
+    echo "$failures check(s) failed"
+    exit 1
+fi
+echo "all CLI checks passed"
