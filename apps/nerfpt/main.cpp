@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <exception>
 
+#include "cmd_compare.h"
 #include "cmd_info.h"
 #include "cmd_render.h"
 #include "common.h"
@@ -40,6 +41,8 @@ int main(int argc, char** argv) {
     CLI::App* render_cmd = add_render_command(app, render_args);
     InfoArgs info_args;
     CLI::App* info_cmd = add_info_command(app, info_args);
+    CompareArgs compare_args;
+    CLI::App* compare_cmd = add_compare_command(app, compare_args);
 
     try {
         app.parse(argc, argv);
@@ -58,6 +61,7 @@ int main(int argc, char** argv) {
     try {
         if (render_cmd->parsed()) return run_render(render_args, global, interrupts);
         if (info_cmd->parsed()) return run_info(info_args, global);
+        if (compare_cmd->parsed()) return run_compare(compare_args, global);
     } catch (const npt::Error& e) {
         print_error(e.what());
         return k_exit_error;

@@ -120,7 +120,7 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
         ray = spawn_ray(si, wi_world);
 
         if (depth + 1 >= ps.rr_start_depth) {
-            float survive = fminf(0.95f, max_component(throughput));
+            float survive = fminf(1.0f, max_component(throughput));
             if (sampler.next_1d() >= survive) break;
             throughput *= 1.0f / survive;
         }
