@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
     app.footer("Run 'nerfpt SUBCOMMAND --help' for the options of each subcommand.");
     app.set_version_flag("--version", std::string("nerfpt ") + k_version, "Print the version and exit");
     app.require_subcommand(1, 1);
+    app.fallthrough();  // global options may also follow the subcommand: nerfpt render -q ...
     GlobalSettings global;
     app.add_flag("-v,--verbose", global.verbose, "Print debug messages (loading details, timings)");
     app.add_flag("-q,--quiet", global.quiet, "Print errors only: no progress, no info messages")

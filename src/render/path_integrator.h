@@ -120,7 +120,10 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
         ray = spawn_ray(si, wi_world);
 
         if (depth + 1 >= ps.rr_start_depth) {
-            float survive = fminf(1.0f, max_component(throughput));
+            // Roulette only once the throughput has fallen below 1/8: killing brighter paths costs more variance
+            // than the time it saves (bench/render_bench on cornell, efficiency 1 / (relMSE x seconds): 379 with
+            // survival = max(throughput) as in pbrt, 629 with 4x, 715 with 8x, 685 with 16x, 558 with no roulette).
+            float survive = fminf(1.0f, 8.0f * max_component(throughput));
             if (sampler.next_1d() >= survive) break;
             throughput *= 1.0f / survive;
         }
