@@ -5,13 +5,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
-scripts/install_deps.sh
-
-cmake_args=(-S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release)
-if ! command -v nvcc >/dev/null 2>&1 && [[ -z "${CUDACXX:-}" && -x /usr/local/cuda/bin/nvcc ]]; then
-    cmake_args+=(-DCMAKE_CUDA_COMPILER=/usr/local/cuda/bin/nvcc)
-fi
-cmake "${cmake_args[@]}" >/dev/null
+scripts/configure.sh >/dev/null
 # The demo needs only the nerfpt binary, not the tests or benchmarks.
 cmake --build build -j "${NERFPT_JOBS:-$(nproc)}" --target nerfpt_cli
 

@@ -1,8 +1,14 @@
 // Helpers shared by tests: where the shared data and the test data live, temporary folders.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
+#include <initializer_list>
 #include <string>
+
+#include "core/error.h"
+#include "core/vec.h"
 
 namespace npt::test {
 
@@ -15,11 +21,32 @@ std::filesystem::path temp_dir();
 // Writes `content` to `path` (binary), creating parent folders.
 void write_file(const std::filesystem::path& path, const std::string& content);
 
+// Runs `fn` and expects an npt::Error whose message is one line and contains every one of `parts` (the file,
+// the field...): the project's rule for errors a user sees.
+template <typename Fn>
+void expect_error_message(Fn&& fn, std::initializer_list<std::string> parts) {
+    try {
+        fn();
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        const std::string msg = e.what();
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+        for (const auto& p : parts)
+            EXPECT_NE(msg.find(p), std::string::npos) << "'" << p << "' not in: " << msg;
+    }
+}
+
+inline void expect_near(Vec3 a, Vec3 b, float tol = 1e-5f) {
+    EXPECT_NEAR(a.x, b.x, tol);
+    EXPECT_NEAR(a.y, b.y, tol);
+    EXPECT_NEAR(a.z, b.z, tol);
+}
+
 }  // namespace npt::test
 
 // Skips the current test with a clear message when a shared data path is missing.
-#define NPT_REQUIRE_SHARED(path)                                                                      \
-    do {                                                                                              \
-        if (!std::filesystem::exists(path))                                                           \
+#define NPT_REQUIRE_SHARED(path)                                                                             \
+    do {                                                                                                     \
+        if (!std::filesystem::exists(path))                                                                  \
             GTEST_SKIP() << "shared data missing: " << (path).string() << " (see ../shared/data/README.md)"; \
     } while (0)

@@ -9,8 +9,9 @@ namespace npt::cli {
 
 CLI::App* add_compare_command(CLI::App& app, CompareArgs& args) {
     CLI::App* cmd = app.add_subcommand(
-        "compare", "Compare an image with a reference: relative MSE mean((x-r)^2/(r^2+0.01)) over pixels and RGB, "
-                   "and the image mean per channel. Both images must have the same size (EXR, HDR or PNG).");
+        "compare",
+        "Compare an image with a reference: relative MSE mean((x-r)^2/(r^2+0.01)) over pixels and RGB, "
+        "and the image mean per channel. Both images must have the same size (EXR, HDR or PNG).");
     cmd->add_option("IMAGE", args.image, "The image to judge")->required()->check(CLI::ExistingFile);
     cmd->add_option("REFERENCE", args.reference, "The reference image")->required()->check(CLI::ExistingFile);
     return cmd;
@@ -23,8 +24,8 @@ int run_compare(const CompareArgs& args, const GlobalSettings&) {
     fmt::print("relMSE     {:.4g}\n", c.rel_mse);
     const char* names[3] = {"R", "G", "B"};
     for (size_t k = 0; k < 3; ++k)
-        fmt::print("mean {}     {:.5f} vs {:.5f} (relative {:+.2e})\n", names[k], c.mean_test[k], c.mean_ref[k],
-                   c.mean_rel_err[k]);
+        fmt::print("mean {}     {:.5f} vs {:.5f} (relative {:+.2e})\n", names[k], c.mean_test[k],
+                   c.mean_ref[k], c.mean_rel_err[k]);
     return 0;
 }
 

@@ -1,5 +1,5 @@
-// `nerfpt compare`: error measures between a render and a reference image (relMSE, per-channel means), the same
-// numbers the reference tests and benchmarks use.
+// `nerfpt compare`: error measures between a render and a reference image (relMSE, per-channel means), the
+// same numbers the reference tests and benchmarks use.
 #pragma once
 
 #include <CLI/CLI.hpp>

@@ -12,6 +12,7 @@
 
 #include <random>
 
+#include "core/sobol_sampler.h"
 #include "lights/light.h"
 #include "lights/light_set.h"
 #include "materials/bsdf.h"
@@ -112,6 +113,25 @@ TEST(SharedMathGpu, CameraRaysMatchCpu) {
     for (size_t i = 0; i < cases.size(); ++i) {
         Ray r = render::generate_camera_ray(cam, cases[i].i, cases[i].j, cases[i].u);
         EXPECT_TRUE(close(r.o, rays[i].o) && close(r.d, rays[i].d)) << "case " << i;
+    }
+}
+
+// The sampler has a device-only code path (bit loop instead of byte tables, __brev): integer arithmetic, so
+// the values must be bit-identical.
+TEST(SharedMathGpu, SobolSamplerIsBitIdentical) {
+    ASSERT_TRUE(gpu::device_available());
+    const int dims = int(k_sobol_dimensions) + 3;
+    std::vector<gpu::SamplerCase> cases;
+    for (uint32_t i = 0; i < 4096; ++i) cases.push_back({i % 97, i / 97, i * 7919u % 1024u});
+    std::vector<Vec2> out = gpu::run_sampler_cases(12345, dims, cases);
+    ASSERT_EQ(out.size(), cases.size() * size_t(dims));
+    for (size_t i = 0; i < cases.size(); ++i) {
+        SobolSampler s(12345, cases[i].px, cases[i].py, cases[i].sample);
+        for (int d = 0; d < dims; ++d) {
+            Vec2 v = s.next_2d();
+            ASSERT_EQ(v.x, out[i * size_t(dims) + size_t(d)].x) << "case " << i << " dim " << d;
+            ASSERT_EQ(v.y, out[i * size_t(dims) + size_t(d)].y) << "case " << i << " dim " << d;
+        }
     }
 }
 

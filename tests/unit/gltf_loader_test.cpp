@@ -130,22 +130,10 @@ std::string png_bytes(int w, int h, const std::vector<unsigned char>& rgb) {
 // Expects load_scene to throw an npt::Error whose message contains each of `parts`.
 void expect_error(const fs::path& path, std::initializer_list<std::string> parts,
                   const LoadOptions& opt = {}) {
-    try {
-        load_scene(path, opt);
-        ADD_FAILURE() << "no error for " << path;
-    } catch (const Error& e) {
-        const std::string msg = e.what();
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-        for (const auto& p : parts)
-            EXPECT_NE(msg.find(p), std::string::npos) << "'" << p << "' not in: " << msg;
-    }
+    test::expect_error_message([&] { load_scene(path, opt); }, parts);
 }
 
-void expect_near(Vec3 a, Vec3 b, float tol = 1e-5f) {
-    EXPECT_NEAR(a.x, b.x, tol);
-    EXPECT_NEAR(a.y, b.y, tol);
-    EXPECT_NEAR(a.z, b.z, tol);
-}
+using test::expect_near;
 
 const Mesh* find_mesh(const Scene& s, const std::string& name) {
     for (const auto& m : s.meshes)

@@ -19,22 +19,10 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 void expect_error(const fs::path& path, std::initializer_list<std::string> parts) {
-    try {
-        load_scene(path);
-        ADD_FAILURE() << "no error for " << path;
-    } catch (const Error& e) {
-        const std::string msg = e.what();
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-        for (const auto& p : parts)
-            EXPECT_NE(msg.find(p), std::string::npos) << "'" << p << "' not in: " << msg;
-    }
+    test::expect_error_message([&] { load_scene(path); }, parts);
 }
 
-void expect_near(Vec3 a, Vec3 b, float tol = 1e-5f) {
-    EXPECT_NEAR(a.x, b.x, tol);
-    EXPECT_NEAR(a.y, b.y, tol);
-    EXPECT_NEAR(a.z, b.z, tol);
-}
+using test::expect_near;
 
 // A folder with a one-triangle OBJ and a glTF holding only a named camera.
 fs::path make_assets() {

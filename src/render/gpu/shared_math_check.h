@@ -43,6 +43,12 @@ struct LightResult {
     bool sampled;
     lights::LightSample sample;
 };
+// The first `dimensions` 2D values of SobolSampler(seed, px, py, sample) for each case, in order.
+struct SamplerCase {
+    uint32_t px, py, sample;
+};
+std::vector<Vec2> run_sampler_cases(uint64_t seed, int dimensions, const std::vector<SamplerCase>& cases);
+
 // `lights` points at host memory; its arrays are copied to the device for the run.
 std::vector<LightResult> run_light_cases(const lights::LightSetView& lights,
                                          const std::vector<LightCase>& cases);

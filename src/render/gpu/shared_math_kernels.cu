@@ -2,6 +2,7 @@
 // Compiling this file is also what makes host-only code in those headers a build error wherever nvcc exists.
 #include <vector>
 
+#include "core/sobol_sampler.h"
 #include "lights/light.h"
 #include "materials/bsdf.h"
 #include "render/camera.h"
@@ -40,6 +41,13 @@ __global__ void light_kernel(lights::LightSetView ls, const LightCase* cases, Li
     r.sample = lights::LightSample{};
     r.sampled = lights::sample_light(ls, cases[i].ref_p, cases[i].u_select, cases[i].u, &r.sample);
     out[i] = r;
+}
+
+__global__ void sampler_kernel(uint64_t seed, int dims, const SamplerCase* cases, Vec2* out, size_t n) {
+    size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i >= n) return;
+    SobolSampler s(seed, cases[i].px, cases[i].py, cases[i].sample);
+    for (int d = 0; d < dims; ++d) out[i * size_t(dims) + size_t(d)] = s.next_2d();
 }
 
 void check_launch(const char* what) {
@@ -116,6 +124,15 @@ std::vector<Ray> run_camera_cases(const render::CameraView& camera, const std::v
     DeviceBuffer<Ray> out(cases.size());
     if (!cases.empty()) camera_kernel<<<blocks_for(cases.size()), k_block>>>(camera, in.data(), out.data(), cases.size());
     check_launch("camera_kernel");
+    return out.download();
+}
+
+std::vector<Vec2> run_sampler_cases(uint64_t seed, int dimensions, const std::vector<SamplerCase>& cases) {
+    DeviceBuffer<SamplerCase> in(cases);
+    DeviceBuffer<Vec2> out(cases.size() * size_t(dimensions));
+    if (!cases.empty())
+        sampler_kernel<<<blocks_for(cases.size()), k_block>>>(seed, dimensions, in.data(), out.data(), cases.size());
+    check_launch("sampler_kernel");
     return out.download();
 }
 
