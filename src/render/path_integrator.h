@@ -9,6 +9,7 @@
 #include "core/vec.h"
 #include "lights/light.h"
 #include "materials/bsdf.h"
+#include "media/volume_integrator.h"
 #include "render/ray_offset.h"
 #include "render/surface.h"
 
@@ -50,7 +51,19 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
 
     for (int depth = 0;; ++depth) {
         Hit hit;
-        if (!tracer.intersect(ray, INFINITY, &hit)) {
+        bool found = tracer.intersect(ray, INFINITY, &hit);
+
+        // The volume ray: emission and attenuation of the volumes on [0, nearest surface), so a surface
+        // inside or behind a volume occludes exactly the part of it that lies behind the surface.
+        if (sv.volumes.size > 0) {
+            media::VolumeResult vol = media::integrate_volumes(
+                sv.volumes, ray, 0.0f, found ? hit.t : INFINITY, sampler.next_1d(), false);
+            radiance += throughput * vol.radiance;
+            throughput *= vol.transmittance;
+            if (vol.transmittance == 0.0f) break;
+        }
+
+        if (!found) {
             const lights::LightSetView& ls = sv.lights;
             if (ls.environment_light >= 0) {
                 Rgb le = lights::environment_radiance(ls.environment, ray.d);
@@ -95,11 +108,17 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
                 if (!is_black(f) && geometry_agrees(si, wo_world, ls.wi)) {
                     Ray shadow = spawn_ray(si, ls.wi);
                     float tmax = isinf(ls.distance) ? INFINITY : ls.distance * (1.0f - 1e-4f);
-                    if (!tracer.occluded(shadow, tmax)) {
+                    // Shadow rays see the volumes' transmittance (no emission: the volume does not scatter).
+                    float shadow_t = tracer.occluded(shadow, tmax) ? 0.0f : 1.0f;
+                    if (shadow_t > 0.0f && sv.volumes.size > 0)
+                        shadow_t =
+                            media::integrate_volumes(sv.volumes, shadow, 0.0f, tmax, sampler.next_1d(), true)
+                                .transmittance;
+                    if (shadow_t > 0.0f) {
                         float w = ls.is_delta || ps.strategy == LightStrategy::LightOnly
                                       ? 1.0f
                                       : power_heuristic(ls.pdf, materials::bsdf_pdf(bsdf, wo, wi));
-                        radiance += throughput * f * ls.radiance * (w / ls.pdf);
+                        radiance += throughput * f * ls.radiance * (shadow_t * w / ls.pdf);
                     }
                 }
             }
@@ -120,9 +139,10 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
         ray = spawn_ray(si, wi_world);
 
         if (depth + 1 >= ps.rr_start_depth) {
-            // Roulette only once the throughput has fallen below 1/8: killing brighter paths costs more variance
-            // than the time it saves (bench/render_bench on cornell, efficiency 1 / (relMSE x seconds): 379 with
-            // survival = max(throughput) as in pbrt, 629 with 4x, 715 with 8x, 685 with 16x, 558 with no roulette).
+            // Roulette only once the throughput has fallen below 1/8: killing brighter paths costs more
+            // variance than the time it saves (bench/render_bench on cornell, efficiency 1 / (relMSE x
+            // seconds): 379 with survival = max(throughput) as in pbrt, 629 with 4x, 715 with 8x, 685 with
+            // 16x, 558 with no roulette).
             float survive = fminf(1.0f, 8.0f * max_component(throughput));
             if (sampler.next_1d() >= survive) break;
             throughput *= 1.0f / survive;

@@ -79,11 +79,13 @@ SceneData::SceneData(const scene::Scene& scene, int width, int height) {
         m_meshes.push_back(v);
     }
     m_lights = std::make_unique<lights::LightSet>(scene);
+    m_volumes = std::make_unique<media::VolumeSet>(scene);
 
     m_view.meshes = {m_meshes.data(), m_meshes.size()};
     m_view.materials = {m_materials.data(), m_materials.size()};
     m_view.textures = {m_textures.data(), m_textures.size()};
     m_view.lights = m_lights->view();
+    m_view.volumes = m_volumes->views();
     m_view.camera = make_camera_view(scene, width, height);
 }
 

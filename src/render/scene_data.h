@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "lights/light_set.h"
+#include "media/volume_set.h"
 #include "render/scene_view.h"
 #include "scene/scene.h"
 
@@ -21,6 +22,7 @@ class SceneData {
     std::vector<MaterialView> m_materials;
     std::vector<TextureView> m_textures;
     std::unique_ptr<lights::LightSet> m_lights;
+    std::unique_ptr<media::VolumeSet> m_volumes;
     SceneView m_view;
 };
 

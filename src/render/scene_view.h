@@ -6,6 +6,7 @@
 #include "core/texture.h"
 #include "core/vec.h"
 #include "lights/light.h"
+#include "media/volume.h"
 
 namespace npt::render {
 
@@ -50,6 +51,7 @@ struct SceneView {
     Span<const MaterialView> materials;
     Span<const TextureView> textures;
     lights::LightSetView lights;
+    Span<const media::VolumeView> volumes;  // the `volume` cubes: emission-absorption, never surfaces
     CameraView camera;
 };
 

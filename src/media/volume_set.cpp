@@ -1,0 +1,140 @@
+#include "media/volume_set.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+
+namespace npt::media {
+
+namespace {
+
+float number_field(const nlohmann::json& v, const char* key, float fallback, const std::string& where) {
+    if (!v.contains(key)) return fallback;
+    const auto& f = v[key];
+    if (!f.is_number()) throw Error(where + ": extras.volume." + key + ": expected a number");
+    double d = f.get<double>();
+    if (!std::isfinite(d) || d < 0.0)
+        throw Error(where + ": extras.volume." + key + ": must be finite and >= 0");
+    return float(d);
+}
+
+Affine3 to_affine(const Mat4& m) {
+    Affine3 a;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) a.m[r * 3 + c] = float(m.m[size_t(r)][size_t(c)]);
+    a.t = Vec3(float(m.m[0][3]), float(m.m[1][3]), float(m.m[2][3]));
+    return a;
+}
+
+}  // namespace
+
+VolumeDesc parse_volume_desc(const std::string& extras_json, const std::string& where) {
+    const char* expected =
+        " (expected extras {\"volume\": {\"file\": \"...\", \"density_scale\": 1, \"emission_scale\": 1}})";
+    if (extras_json.empty()) throw Error(where + ": the `volume` cube has no extras" + expected);
+    nlohmann::json j = nlohmann::json::parse(extras_json, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("volume") || !j["volume"].is_object())
+        throw Error(where + ": extras has no `volume` object" + expected);
+    const auto& v = j["volume"];
+    VolumeDesc d;
+    if (!v.contains("file") || !v["file"].is_string() || v["file"].get<std::string>().empty())
+        throw Error(where + ": extras.volume.file: expected the path of a grid file");
+    d.file = v["file"].get<std::string>();
+    d.density_scale = number_field(v, "density_scale", 1.0f, where);
+    d.emission_scale = number_field(v, "emission_scale", 1.0f, where);
+    d.step_voxels = number_field(v, "step_voxels", 0.25f, where);
+    if (d.step_voxels < 0.01f || d.step_voxels > 4.0f)
+        throw Error(where + ": extras.volume.step_voxels: must lie in [0.01, 4]");
+    if (v.contains("casts_shadows")) {
+        if (!v["casts_shadows"].is_boolean())
+            throw Error(where + ": extras.volume.casts_shadows: expected true or false");
+        d.casts_shadows = v["casts_shadows"].get<bool>();
+    }
+    return d;
+}
+
+std::vector<float> build_majorant(const VolumeGrid& g, int* nx, int* ny, int* nz) {
+    const int b = k_majorant_block;
+    // Cell c covers voxels b c - 1 .. b c + b (the trilinear support of its index range).
+    auto cells = [b](int n) { return (n + 1 + b - 1) / b; };
+    *nx = cells(g.nx);
+    *ny = cells(g.ny);
+    *nz = cells(g.nz);
+    std::vector<float> m(size_t(*nx) * size_t(*ny) * size_t(*nz), 0.0f);
+    for (int k = 0; k < g.nz; ++k)
+        for (int j = 0; j < g.ny; ++j)
+            for (int i = 0; i < g.nx; ++i) {
+                float d = g.density[(size_t(k) * size_t(g.ny) + size_t(j)) * size_t(g.nx) + size_t(i)];
+                if (d <= 0.0f) continue;
+                // Voxel i is in the support of cells whose range [b c - 1, b c + b] contains it.
+                int ci0 = std::max(0, (i - b) / b), ci1 = std::min(*nx - 1, (i + 1) / b);
+                int cj0 = std::max(0, (j - b) / b), cj1 = std::min(*ny - 1, (j + 1) / b);
+                int ck0 = std::max(0, (k - b) / b), ck1 = std::min(*nz - 1, (k + 1) / b);
+                for (int ck = ck0; ck <= ck1; ++ck)
+                    for (int cj = cj0; cj <= cj1; ++cj)
+                        for (int ci = ci0; ci <= ci1; ++ci) {
+                            float& cell =
+                                m[(size_t(ck) * size_t(*ny) + size_t(cj)) * size_t(*nx) + size_t(ci)];
+                            cell = std::max(cell, d);
+                        }
+            }
+    return m;
+}
+
+VolumeSet::VolumeSet(const scene::Scene& scene) {
+    m_owned.reserve(scene.volumes.size());
+    for (const auto& inst : scene.volumes) {
+        std::string where = scene.source.filename().string() + ": node '" + inst.name + "'";
+        VolumeDesc desc = parse_volume_desc(inst.extras_json, where);
+        std::filesystem::path file = desc.file;
+        if (file.is_relative()) file = scene.source.parent_path() / file;
+        std::string ext = file.extension().string();
+        if (ext == ".npt")
+            throw Error(where + ": extras.volume.file '" + desc.file +
+                        "': nerfpt model files are not supported in scenes yet; bake the model to a grid");
+
+        GridLoadOptions opt;
+        opt.local_min = inst.local_min;
+        opt.local_max = inst.local_max;
+        Owned owned;
+        owned.grid = load_volume_grid(file, opt);
+        owned.majorant = build_majorant(owned.grid, &owned.mx, &owned.my, &owned.mz);
+        m_owned.push_back(std::move(owned));
+
+        Mat4 world_to_local = inst.local_to_world.inverse();
+        VolumeView v;
+        v.world_to_local = to_affine(world_to_local);
+        v.local_min = inst.local_min;
+        v.local_max = inst.local_max;
+        v.density_scale = desc.density_scale;
+        v.emission_scale = desc.emission_scale;
+        v.step_voxels = desc.step_voxels;
+        v.casts_shadows = desc.casts_shadows;
+        if (ext == ".bin") {
+            // instant-ngp sigma is per unit of its unit cube, taken to span the cube's longest world side.
+            Vec3 size = inst.local_max - inst.local_min;
+            float longest = 0.0f;
+            for (int a = 0; a < 3; ++a) {
+                Vec3 axis(0.0f);
+                axis[a] = size[a];
+                longest = std::max(longest, length(inst.local_to_world.transform_vector(axis)));
+            }
+            if (longest > 0.0f) v.density_scale /= longest;
+        }
+        m_views.push_back(v);
+        spdlog::debug("{}: volume grid {}x{}x{} from {}", where, owned.grid.nx, owned.grid.ny, owned.grid.nz,
+                      file.string());
+    }
+    // Views point into m_owned, which no longer moves.
+    for (size_t i = 0; i < m_views.size(); ++i) {
+        m_views[i].grid = m_owned[i].grid.view();
+        m_views[i].majorant =
+            MajorantView{m_owned[i].mx, m_owned[i].my, m_owned[i].mz, m_owned[i].majorant.data()};
+    }
+}
+
+}  // namespace npt::media
