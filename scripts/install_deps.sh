@@ -11,6 +11,7 @@ packages=(
     libcli11-dev libspdlog-dev libfmt-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     libeigen3-dev
+    libopenvdb-dev libnanovdb-dev libboost-dev  # OpenVDB 10 headers include Boost; Debian does not depend on it
     python3
 )
 
