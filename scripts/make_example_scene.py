@@ -3,7 +3,7 @@
 
 A small room (checkered floor, grey back wall, red left and green right walls, ceiling) lit by an emissive quad
 under the ceiling and a spot light, holding a rough metal sphere, a glass sphere, a diffuse box and a `volume`
-placeholder cube (where a NeRF will sit). Python standard library only; the output is deterministic, so
+cube filled with a raw instant-ngp-style grid (a glowing cloud, where a captured NeRF will sit). Python standard library only; the output is deterministic, so
 re-running it gives a byte-identical file. glTF conventions: +Y up, metres, counter-clockwise front faces
 (here all facing into the room or out of the objects), cameras look down their local -Z.
 
@@ -16,6 +16,29 @@ import os
 import struct
 import sys
 import zlib
+
+CLOUD_N = 32
+CLOUD_FILE = "%dx%dx%d_cloud.bin" % (CLOUD_N, CLOUD_N, CLOUD_N)
+
+
+def cloud_grid(n=CLOUD_N):
+    """A glowing cloud as instant-ngp writes raw grids: float32 R, G, B (sRGB), sigma per voxel, x fastest, the
+    first row at the TOP (y flipped). sigma is in instant-ngp units (per unit cube; nerfpt divides by the cube's
+    longest world side), peaking near 20, so the core is opaque and the rim translucent."""
+    out = bytearray()
+    for k in range(n):
+        for jr in range(n):
+            j = n - 1 - jr  # y flipped: file row 0 is the top
+            for i in range(n):
+                x, y, z = [2.0 * (c + 0.5) / n - 1.0 for c in (i, j, k)]
+                r = math.sqrt(x * x + y * y + z * z)
+                wobble = 0.12 * math.sin(5.0 * x + 1.3) * math.sin(4.0 * y + 0.7) * math.sin(6.0 * z + 2.1)
+                shell = max(0.0, 1.0 - (r + wobble) / 0.85)
+                sigma = 20.0 * shell ** 1.5
+                h = 0.5 * (y + 1.0)
+                rgb = (0.95 - 0.6 * h, 0.45 + 0.3 * h, 0.15 + 0.8 * h)
+                out += struct.pack("<4f", *rgb, sigma)
+    return bytes(out)
 
 
 class Builder:
@@ -222,8 +245,8 @@ def main():
     add_mesh("box", box(0.35), "box",
              {"translation": [0.45, 0.35, -1.45], "rotation": [0.0, math.sin(yaw / 2), 0.0, math.cos(yaw / 2)]})
     add_mesh("nerf_volume", box(1.0), "volume",
-             {"translation": [-1.0, 0.35, 1.1], "scale": [0.3, 0.3, 0.3],
-              "extras": {"volume": {"file": "none-yet", "density_scale": 1.0, "emission_scale": 1.0}}})
+             {"translation": [-0.1, 0.36, 0.6], "scale": [0.35, 0.35, 0.35],
+              "extras": {"volume": {"file": CLOUD_FILE, "density_scale": 1.0, "emission_scale": 2.5}}})
 
     spot_pos = [1.3, 2.7, 1.4]
     spot_target = [0.7, 0.5, 0.0]
@@ -241,7 +264,7 @@ def main():
                            "KHR_materials_ior"],
         "scene": 0,
         "scenes": [{"name": "example", "nodes": list(range(len(nodes))),
-                    "extras": {"width": 640, "height": 480, "spp": 64, "max_depth": 12,
+                    "extras": {"width": 640, "height": 480, "spp": 32, "max_depth": 12,
                                "background": [0.02, 0.02, 0.03]}}],
         "nodes": nodes,
         "meshes": meshes,
@@ -264,6 +287,10 @@ def main():
         json.dump(gltf, f, indent=1)
         f.write("\n")
     print("wrote %s (%d bytes)" % (out, os.path.getsize(out)))
+    cloud = os.path.join(os.path.dirname(os.path.abspath(out)), CLOUD_FILE)
+    with open(cloud, "wb") as f:
+        f.write(cloud_grid())
+    print("wrote %s (%d bytes)" % (cloud, os.path.getsize(cloud)))
 
 
 if __name__ == "__main__":
