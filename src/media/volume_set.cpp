@@ -88,10 +88,11 @@ std::vector<float> build_majorant(const VolumeGrid& g, int* nx, int* ny, int* nz
 VolumeSet::VolumeSet(const scene::Scene& scene) {
     m_owned.reserve(scene.volumes.size());
     for (const auto& inst : scene.volumes) {
-        std::string where = scene.source.filename().string() + ": node '" + inst.name + "'";
+        const std::filesystem::path& declared = inst.declared_in.empty() ? scene.source : inst.declared_in;
+        std::string where = declared.string() + ": node '" + inst.name + "'";
         VolumeDesc desc = parse_volume_desc(inst.extras_json, where);
         std::filesystem::path file = desc.file;
-        if (file.is_relative()) file = scene.source.parent_path() / file;
+        if (file.is_relative()) file = declared.parent_path() / file;
         std::string ext = file.extension().string();
         if (ext == ".npt")
             throw Error(where + ": extras.volume.file '" + desc.file +

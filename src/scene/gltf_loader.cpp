@@ -177,6 +177,7 @@ class Flattener {
                 v.local_to_world = world;
                 mesh_bounds(mesh, v.local_min, v.local_max);
                 v.extras_json = model.nodes[size_t(node_index)].extras_json_string;
+                v.declared_in = m_ctx.file;
                 m_scene.volumes.push_back(std::move(v));
                 continue;
             }

@@ -106,6 +106,25 @@ Mat4 placement(const Reader& r, const json& inc, const std::string& field) {
     return t * rot * s;
 }
 
+// A volume declared in the JSON itself: the cube [-1, 1]^3 placed by translation/rotation/scale, filled as a
+// glTF node's extras.volume would say (the fields are checked where the grid is loaded).
+void read_volume(const Reader& r, const json& v, const std::string& field, const fs::path& json_path,
+                 Scene& scene) {
+    if (!v.is_object()) r.fail(field, "expected an object {\"file\": ..., \"translation\": ...}");
+    r.check_keys(v, field,
+                 {"name", "file", "translation", "rotation", "scale", "density_scale", "emission_scale",
+                  "casts_shadows", "step_voxels"});
+    if (!v.contains("file")) r.fail(field + ".file", "missing");
+    VolumeInstance vol;
+    vol.name = v.contains("name") ? r.string(v["name"], field + ".name") : field;
+    vol.local_to_world = placement(r, v, field);
+    vol.declared_in = json_path;
+    json fill = v;
+    for (const char* k : {"name", "translation", "rotation", "scale"}) fill.erase(k);
+    vol.extras_json = json{{"volume", fill}}.dump();
+    scene.volumes.push_back(std::move(vol));
+}
+
 void load_include(const Reader& r, const json& inc, const std::string& field, const fs::path& dir,
                   Scene& scene) {
     std::string rel;
@@ -217,7 +236,7 @@ void load_json_scene(const fs::path& path, const LoadOptions& options, Scene& sc
     const json root = parse_file(path);
     const Reader r(path.string());
     if (!root.is_object()) r.fail("(top level)", "expected an object");
-    r.check_keys(root, "", {"include", "camera", "environment", "background", "render"});
+    r.check_keys(root, "", {"include", "volumes", "camera", "environment", "background", "render"});
     const fs::path dir = path.parent_path();
 
     if (root.contains("include")) {
@@ -225,6 +244,12 @@ void load_json_scene(const fs::path& path, const LoadOptions& options, Scene& sc
         if (!inc.is_array()) r.fail("include", "expected an array of files");
         for (size_t i = 0; i < inc.size(); ++i)
             load_include(r, inc[i], "include[" + std::to_string(i) + "]", dir, scene);
+    }
+    if (root.contains("volumes")) {
+        const json& vols = root["volumes"];
+        if (!vols.is_array()) r.fail("volumes", "expected an array of volumes");
+        for (size_t i = 0; i < vols.size(); ++i)
+            read_volume(r, vols[i], "volumes[" + std::to_string(i) + "]", path, scene);
     }
     // The JSON's own settings override whatever the included files said.
     if (root.contains("background")) scene.environment.color = r.vec3(root["background"], "background");

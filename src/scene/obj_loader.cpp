@@ -162,6 +162,7 @@ void load_obj(const fs::path& path, Scene& scene, const Mat4& placement) {
                 VolumeInstance vol;
                 vol.name = shape.name.empty() ? "volume" : shape.name;
                 vol.local_to_world = placement;
+                vol.declared_in = file;
                 mesh_bounds(mesh, vol.local_min, vol.local_max);
                 scene.volumes.push_back(std::move(vol));
                 continue;

@@ -89,6 +89,7 @@ struct VolumeInstance {
     Mat4 local_to_world;     // maps the cube's local box onto the world
     Vec3 local_min{-1.0f}, local_max{1.0f};  // the cube mesh's own bounds in local space
     std::string extras_json; // the node's `extras` (the volume's file, scales); empty if none
+    std::filesystem::path declared_in;  // the file that declared it: messages, and relative grid paths
 };
 
 // Render settings a scene file may carry; the command line overrides them.

@@ -82,6 +82,35 @@ TEST(JsonScene, FullExample) {
     EXPECT_EQ(sc.settings.seed, 7u);
 }
 
+TEST(JsonScene, VolumesArePlacedCubesWithTheirFill) {
+    const fs::path dir = make_assets();
+    const json j = {{"include", {"tri.obj"}},
+                    {"volumes",
+                     {{{"name", "cloud"},
+                       {"file", "8x8x8_c.bin"},
+                       {"translation", {1, 2, 3}},
+                       {"scale", {0.5, 0.5, 0.5}},
+                       {"density_scale", 2.5},
+                       {"casts_shadows", false}}}}};
+    test::write_file(dir / "vol.json", j.dump(2));
+    Scene sc = load_scene(dir / "vol.json");
+    ASSERT_EQ(sc.volumes.size(), 1u);
+    const VolumeInstance& v = sc.volumes[0];
+    EXPECT_EQ(v.name, "cloud");
+    EXPECT_EQ(v.declared_in, dir / "vol.json");
+    expect_near(v.local_to_world.transform_point({1, 1, 1}), {1.5f, 2.5f, 3.5f});
+    const json extras = json::parse(v.extras_json);
+    EXPECT_EQ(extras["volume"]["file"], "8x8x8_c.bin");
+    EXPECT_EQ(extras["volume"]["density_scale"], 2.5);
+    EXPECT_EQ(extras["volume"]["casts_shadows"], false);
+    EXPECT_FALSE(extras["volume"].contains("translation"));
+
+    test::write_file(dir / "bad.json", R"({"volumes": [{"translation": [0, 0, 0]}]})");
+    expect_error(dir / "bad.json", {"bad.json", "volumes[0].file"});
+    test::write_file(dir / "bad2.json", R"({"volumes": {"file": "x"}})");
+    expect_error(dir / "bad2.json", {"bad2.json", "volumes"});
+}
+
 TEST(JsonScene, CameraByName) {
     const fs::path dir = make_assets();
     test::write_file(dir / "a.json", R"({"include": ["tri.obj", "cam.gltf"], "camera": {"name": "cam"}})");
