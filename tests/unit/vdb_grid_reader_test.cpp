@@ -7,6 +7,8 @@
 #include <openvdb/openvdb.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -24,6 +26,7 @@ using openvdb::Vec3d;
 using openvdb::Vec3s;
 
 enum class Format { openvdb, nanovdb };
+void PrintTo(Format f, std::ostream* os) { *os << (f == Format::openvdb ? "OpenVDB" : "NanoVDB"); }
 
 void write_grids(const fs::path& path, const openvdb::GridPtrVec& grids, Format format) {
     if (format == Format::openvdb) {
@@ -249,6 +252,17 @@ TEST_P(VdbGrid, NotAGridFile) {
     test::expect_error_message([&] { load_volume_grid(path, {}); }, {path.string(), "cannot read"});
     test::write_file(path, "");
     test::expect_error_message([&] { load_volume_grid(path, {}); }, {path.string()});
+
+    // A real file cut at several points.
+    const auto whole = file("whole");
+    write_grids(whole, known_grids(scaled_translated()), GetParam());
+    std::ifstream in(whole, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    for (double fraction : {0.1, 0.5, 0.9, 0.99}) {
+        const auto cut = file("truncated");
+        test::write_file(cut, bytes.substr(0, size_t(double(bytes.size()) * fraction)));
+        test::expect_error_message([&] { load_volume_grid(cut, {}); }, {cut.string()});
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Formats, VdbGrid, ::testing::Values(Format::openvdb, Format::nanovdb),
