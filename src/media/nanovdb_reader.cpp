@@ -10,6 +10,7 @@
 #include <spdlog/spdlog.h>
 
 #include <array>
+#include <cctype>
 #include <exception>
 #include <string>
 #include <vector>
@@ -40,6 +41,13 @@ MapD world_to_index(const GridT& grid) {
     return m;
 }
 
+// Lower case, as OpenVDB spells its value types ("float", "vec3s"), so messages read alike for both formats.
+std::string type_name(nanovdb::GridType type) {
+    std::string s = nanovdb::toStr(type);
+    for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
+
 std::string grid_names(const std::vector<nanovdb::io::GridMetaData>& metas) {
     std::string names;
     for (const auto& m : metas) names += (names.empty() ? "'" : ", '") + m.gridName + "'";
@@ -54,8 +62,8 @@ nanovdb::GridHandle<> read_typed(const std::string& where, const nanovdb::io::Gr
                                  nanovdb::GridType type, uintmax_t file_size) {
     const std::string grid = "grid '" + meta.gridName + "'";
     if (meta.gridType != type)
-        throw Error(where + ": " + grid + " is a " + nanovdb::toStr(meta.gridType) + " grid, expected " +
-                    nanovdb::toStr(type));
+        throw Error(where + ": " + grid + " is a " + type_name(meta.gridType) + " grid, expected " +
+                    type_name(type));
     if (meta.codec != nanovdb::io::Codec::NONE)
         throw Error(where + ": " + grid + " is compressed (" + nanovdb::io::toStr(meta.codec) +
                     "); only uncompressed NanoVDB files are supported");

@@ -4,6 +4,7 @@
 #include <openvdb/tools/Interpolation.h>
 #include <spdlog/spdlog.h>
 
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -139,8 +140,10 @@ VolumeGrid read_openvdb_grid(const std::filesystem::path& path) {
                     }
         }
         return g;
-    } catch (const openvdb::Exception& e) {
-        // OpenVDB's messages span "IoError: ..." and are otherwise fine to show; keep them on one line.
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        // openvdb::Exception ("IoError: ..."), or std::ios/bad_alloc from a corrupt stream: one line.
         std::string msg = e.what();
         for (char& c : msg)
             if (c == '\n') c = ' ';
