@@ -1,8 +1,8 @@
-// A volume's field as the per-sample code sees it: a dense grid of density and colour, its map from the volume
-// cube's local space to continuous voxel-index space, and trilinear lookup (zero outside the grid).
+// A volume's field as the per-sample code sees it: a dense grid of density and colour, its map from the
+// volume cube's local space to continuous voxel-index space, and trilinear lookup (zero outside the grid).
 // Conventions (docs/formats.md, "Volumes"): the value of voxel (i, j, k) sits at index-space point (i, j, k)
-// (OpenVDB's convention); a local point p has index coordinates x = local_to_index * p, and the field there is
-// the trilinear interpolation of the 8 voxels around x, voxels outside [0, n) counting as 0.
+// (OpenVDB's convention); a local point p has index coordinates x = local_to_index * p, and the field there
+// is the trilinear interpolation of the 8 voxels around x, voxels outside [0, n) counting as 0.
 #pragma once
 
 #include "core/platform.h"
@@ -31,26 +31,32 @@ struct GridView {
     Affine3 local_to_index;
 
     NPT_HD bool valid() const { return nx > 0 && ny > 0 && nz > 0 && density && color; }
-    NPT_HD size_t index(int i, int j, int k) const { return (size_t(k) * size_t(ny) + size_t(j)) * size_t(nx) + size_t(i); }
+    NPT_HD size_t index(int i, int j, int k) const {
+        return (size_t(k) * size_t(ny) + size_t(j)) * size_t(nx) + size_t(i);
+    }
     NPT_HD bool inside(int i, int j, int k) const {
         return i >= 0 && j >= 0 && k >= 0 && i < nx && j < ny && k < nz;
     }
 };
 
-// Density and colour at continuous index coordinates x (already mapped from local space). The colour returned is
-// the trilinear interpolation of colour itself (not of density x colour), as Cycles and OpenVDB samplers do.
+// Density and colour at continuous index coordinates x (already mapped from local space). The colour returned
+// is the trilinear interpolation of colour itself (not of density x colour), as Cycles and OpenVDB samplers
+// do.
 struct FieldSample {
     float density;
     Vec3 color;
 };
 
 NPT_HD NPT_INLINE FieldSample sample_trilinear(const GridView& g, Vec3 x) {
+    FieldSample s{0.0f, Vec3(0.0f)};
     float fx = floorf(x.x), fy = floorf(x.y), fz = floorf(x.z);
+    // Reject in float before converting: int() of NaN or of a huge value is undefined. The 8 neighbours are
+    // all outside the grid when floor(x) < -1 or >= n on any axis (this also rejects NaN).
+    if (!(fx >= -1.0f && fy >= -1.0f && fz >= -1.0f && fx < float(g.nx) && fy < float(g.ny) &&
+          fz < float(g.nz)))
+        return s;
     int i0 = int(fx), j0 = int(fy), k0 = int(fz);
     float tx = x.x - fx, ty = x.y - fy, tz = x.z - fz;
-    FieldSample s{0.0f, Vec3(0.0f)};
-    // Fast reject: the 8 neighbours are all outside.
-    if (i0 < -1 || j0 < -1 || k0 < -1 || i0 >= g.nx || j0 >= g.ny || k0 >= g.nz || !(fx == fx)) return s;
     for (int c = 0; c < 8; ++c) {
         int di = c & 1, dj = (c >> 1) & 1, dk = (c >> 2) & 1;
         int i = i0 + di, j = j0 + dj, k = k0 + dk;

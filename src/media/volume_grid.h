@@ -16,9 +16,7 @@ struct VolumeGrid {
     std::vector<Vec3> color;
     Affine3 local_to_index;  // from the volume cube's local space (the glTF node's mesh space) to index space
 
-    GridView view() const {
-        return GridView{nx, ny, nz, density.data(), color.data(), local_to_index};
-    }
+    GridView view() const { return GridView{nx, ny, nz, density.data(), color.data(), local_to_index}; }
 };
 
 // How a file's values become the field (from the scene's `extras.volume`, see docs/formats.md).
@@ -29,7 +27,8 @@ struct GridLoadOptions {
 };
 
 // Loads .vdb (OpenVDB), .nvdb (NanoVDB) or a raw instant-ngp grid ({W}x{H}x{D}_*.bin) by extension and name.
-// Negative or NaN densities are clamped to 0 with one warning per file. Throws npt::Error naming file and field.
+// Negative or NaN densities are clamped to 0 with one warning per file. Throws npt::Error naming file and
+// field.
 VolumeGrid load_volume_grid(const std::filesystem::path& path, const GridLoadOptions& options);
 
 // The largest dense grid we allocate (voxels): beyond this a sparse representation is needed (a later issue).

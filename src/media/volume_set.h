@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/platform.h"
+#include "media/majorant.h"
 #include "media/volume.h"
 #include "media/volume_grid.h"
 #include "scene/scene.h"
@@ -24,9 +25,6 @@ struct VolumeDesc {
 
 // Parses `extras_json` of a VolumeInstance; `where` names it in errors ("scene.gltf: node 'volume'").
 VolumeDesc parse_volume_desc(const std::string& extras_json, const std::string& where);
-
-// Per-block maximum density over each block's trilinear support (see MajorantView).
-std::vector<float> build_majorant(const VolumeGrid& grid, int* nx, int* ny, int* nz);
 
 class VolumeSet {
   public:

@@ -7,6 +7,7 @@
 #include "core/vec.h"
 #include "lights/light.h"
 #include "materials/bsdf_types.h"
+#include "media/volume_integrator.h"
 #include "render/scene_view.h"
 
 namespace npt::gpu {
@@ -48,6 +49,16 @@ struct SamplerCase {
     uint32_t px, py, sample;
 };
 std::vector<Vec2> run_sampler_cases(uint64_t seed, int dimensions, const std::vector<SamplerCase>& cases);
+
+struct VolumeCase {
+    Ray ray;
+    float t_end;
+    float xi;
+    bool shadow;
+};
+// `volumes` point at host memory; grids and majorants are copied to the device for the run.
+std::vector<media::VolumeResult> run_volume_cases(const std::vector<media::VolumeView>& volumes,
+                                                  const std::vector<VolumeCase>& cases);
 
 // `lights` points at host memory; its arrays are copied to the device for the run.
 std::vector<LightResult> run_light_cases(const lights::LightSetView& lights,

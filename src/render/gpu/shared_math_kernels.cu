@@ -50,6 +50,14 @@ __global__ void sampler_kernel(uint64_t seed, int dims, const SamplerCase* cases
     for (int d = 0; d < dims; ++d) out[i * size_t(dims) + size_t(d)] = s.next_2d();
 }
 
+__global__ void volume_kernel(Span<const media::VolumeView> volumes, const VolumeCase* cases,
+                              media::VolumeResult* out, size_t n) {
+    size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i >= n) return;
+    const VolumeCase& c = cases[i];
+    out[i] = media::integrate_volumes(volumes, c.ray, 0.0f, c.t_end, c.xi, c.shadow);
+}
+
 void check_launch(const char* what) {
     cuda_check(cudaGetLastError(), what);
     cuda_check(cudaDeviceSynchronize(), what);
@@ -133,6 +141,33 @@ std::vector<Vec2> run_sampler_cases(uint64_t seed, int dimensions, const std::ve
     if (!cases.empty())
         sampler_kernel<<<blocks_for(cases.size()), k_block>>>(seed, dimensions, in.data(), out.data(), cases.size());
     check_launch("sampler_kernel");
+    return out.download();
+}
+
+std::vector<media::VolumeResult> run_volume_cases(const std::vector<media::VolumeView>& volumes,
+                                                  const std::vector<VolumeCase>& cases) {
+    std::vector<DeviceBuffer<float>> densities, majorants;
+    std::vector<DeviceBuffer<Vec3>> colors;
+    std::vector<media::VolumeView> device_views = volumes;
+    for (media::VolumeView& v : device_views) {
+        size_t n = size_t(v.grid.nx) * size_t(v.grid.ny) * size_t(v.grid.nz);
+        densities.emplace_back(v.grid.density, n);
+        colors.emplace_back(v.grid.color, n);
+        v.grid.density = densities.back().data();
+        v.grid.color = colors.back().data();
+        if (v.majorant.max_density) {
+            size_t m = size_t(v.majorant.nx) * size_t(v.majorant.ny) * size_t(v.majorant.nz);
+            majorants.emplace_back(v.majorant.max_density, m);
+            v.majorant.max_density = majorants.back().data();
+        }
+    }
+    DeviceBuffer<media::VolumeView> views(device_views);
+    DeviceBuffer<VolumeCase> in(cases);
+    DeviceBuffer<media::VolumeResult> out(cases.size());
+    if (!cases.empty())
+        volume_kernel<<<blocks_for(cases.size()), k_block>>>({views.data(), views.size()}, in.data(), out.data(),
+                                                            cases.size());
+    check_launch("volume_kernel");
     return out.download();
 }
 
