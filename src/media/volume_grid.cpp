@@ -40,6 +40,32 @@ void sanitize(VolumeGrid& g) {
                      g.source, bad_density, bad_color);
 }
 
+// A raw grid's voxels are samples at the cell centres of the whole cube. Inside the cube the field is
+// reconstructed clamp-to-edge, not faded to zero over the last half voxel: a one-voxel border repeats the
+// outermost samples (index space shifts by one), and the cube's faces cut the field exactly, so a constant
+// grid renders as a constant medium.
+void pad_clamp_to_edge(VolumeGrid& g) {
+    const size_t w = size_t(g.nx), h = size_t(g.ny), d = size_t(g.nz);
+    const size_t px = w + 2, py = h + 2, pz = d + 2;
+    std::vector<float> density(px * py * pz);
+    std::vector<Vec3> color(density.size());
+    auto inner = [](size_t p, size_t n) { return p == 0 ? 0 : (p > n ? n - 1 : p - 1); };
+    for (size_t k = 0; k < pz; ++k)
+        for (size_t j = 0; j < py; ++j)
+            for (size_t i = 0; i < px; ++i) {
+                const size_t src = (inner(k, d) * h + inner(j, h)) * w + inner(i, w);
+                const size_t dst = (k * py + j) * px + i;
+                density[dst] = g.density[src];
+                color[dst] = g.color[src];
+            }
+    g.density = std::move(density);
+    g.color = std::move(color);
+    g.nx = int(px);
+    g.ny = int(py);
+    g.nz = int(pz);
+    g.local_to_index.t += Vec3(1.0f);
+}
+
 }  // namespace
 
 VolumeGrid load_volume_grid(const std::filesystem::path& path, const GridLoadOptions& options) {
@@ -63,6 +89,7 @@ VolumeGrid load_volume_grid(const std::filesystem::path& path, const GridLoadOpt
         throw Error(where + ": unknown volume grid extension '" + ext +
                     "' (expected .vdb, .nvdb or an instant-ngp {W}x{H}x{D}_*.bin)");
     sanitize(g);
+    if (ext == ".bin") pad_clamp_to_edge(g);
     spdlog::debug("{}: volume grid {}x{}x{}", where, g.nx, g.ny, g.nz);
     return g;
 }

@@ -57,9 +57,10 @@ TEST(RawGrid, AxisOrderYFlipAndCellCentres) {
     test::write_file(path, raw_bytes());
     const GridLoadOptions o = box_options();
     const VolumeGrid g = load_volume_grid(path, o);
-    ASSERT_EQ(g.nx, W);
-    ASSERT_EQ(g.ny, H);
-    ASSERT_EQ(g.nz, D);
+    // One border voxel on each side repeats the outermost samples (clamp-to-edge inside the cube).
+    ASSERT_EQ(g.nx, W + 2);
+    ASSERT_EQ(g.ny, H + 2);
+    ASSERT_EQ(g.nz, D + 2);
     // Index coordinates of local points carry float rounding of a few ulp of |x| <= 4, i.e. <~ 2e-6 voxels;
     // sigma changes by at most 100 per voxel, so 1e-3 bounds the sigma error with margin.
     for (int k = 0; k < D; ++k)
@@ -72,12 +73,16 @@ TEST(RawGrid, AxisOrderYFlipAndCellCentres) {
                 test::expect_near(s.color,
                                   Vec3(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)), 1e-5f);
             }
-    // The box's corners are the outer faces of the outer cells: index -0.5 and n - 0.5.
-    test::expect_near(g.local_to_index.apply(o.local_min), Vec3(-0.5f), 1e-5f);
-    test::expect_near(g.local_to_index.apply(o.local_max), Vec3(W - 0.5f, H - 0.5f, D - 0.5f), 1e-5f);
+    // The box's corners are the outer faces of the outer cells: index 0.5 and n + 0.5 (after the border).
+    test::expect_near(g.local_to_index.apply(o.local_min), Vec3(0.5f), 1e-5f);
+    test::expect_near(g.local_to_index.apply(o.local_max), Vec3(W + 0.5f, H + 0.5f, D + 0.5f), 1e-5f);
     // The y flip, said directly: the file's first value (row 0 = top) is at the largest local y.
-    EXPECT_EQ(g.density[g.view().index(0, H - 1, 0)], sigma_of(0, H - 1, 0));
-    EXPECT_EQ(g.density[g.view().index(0, 0, 0)], 0.0f);
+    EXPECT_EQ(g.density[g.view().index(1, H, 1)], sigma_of(0, H - 1, 0));
+    EXPECT_EQ(g.density[g.view().index(1, 1, 1)], 0.0f);
+    // Clamp-to-edge: at the cube's faces the field equals the outermost samples.
+    const Vec3 face = g.local_to_index.apply(
+        Vec3(o.local_max.x, local_centre(o, W - 1, 1, 1).y, local_centre(o, 0, 1, 1).z));
+    EXPECT_NEAR(sample_trilinear(g.view(), face).density, sigma_of(W - 1, 1, 1), 1e-3f);
 }
 
 TEST(RawGrid, LinearColoursAreKeptWhenNotSrgb) {
@@ -86,7 +91,7 @@ TEST(RawGrid, LinearColoursAreKeptWhenNotSrgb) {
     GridLoadOptions o = box_options();
     o.raw_color_is_srgb = false;
     const VolumeGrid g = load_volume_grid(path, o);
-    EXPECT_EQ(g.color[g.view().index(1, 2, 1)].y, srgb_color_of(1, 2, 1).y);
+    EXPECT_EQ(g.color[g.view().index(2, 3, 2)].y, srgb_color_of(1, 2, 1).y);
 }
 
 TEST(RawGrid, DimensionsFromTheName) {
@@ -134,10 +139,11 @@ TEST(RawGrid, NonFiniteAndNegativeValuesAreZeroedWithOneWarning) {
     const VolumeGrid g = load_volume_grid(path, o);
     EXPECT_EQ(log.warnings(), 1) << log.text();
     EXPECT_NE(log.text().find("2 NaN, infinite or negative densities"), std::string::npos) << log.text();
-    EXPECT_EQ(g.density[0], 0.0f);
-    EXPECT_EQ(g.density[1], 0.0f);
-    test::expect_near(g.color[0], Vec3(0.0f, 0.5f, 0.5f), 0.0f);
-    test::expect_near(g.color[1], Vec3(0.5f, 0.0f, 0.5f), 0.0f);
+    const GridView v = g.view();  // file voxel i sits at (i + 1, 1, 1) after the clamp-to-edge border
+    EXPECT_EQ(g.density[v.index(1, 1, 1)], 0.0f);
+    EXPECT_EQ(g.density[v.index(2, 1, 1)], 0.0f);
+    test::expect_near(g.color[v.index(1, 1, 1)], Vec3(0.0f, 0.5f, 0.5f), 0.0f);
+    test::expect_near(g.color[v.index(2, 1, 1)], Vec3(0.5f, 0.0f, 0.5f), 0.0f);
 }
 
 TEST(VolumeGrid, MissingFileAndUnknownExtension) {
