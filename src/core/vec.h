@@ -21,30 +21,30 @@ constexpr float k_inv_4pi = 0.07957747154594766788f;
 struct Vec2 {
     float x = 0, y = 0;
     constexpr Vec2() = default;
-    NPT_HD constexpr Vec2(float x_, float y_) : x(x_), y(y_) {}
-    NPT_HD Vec2 operator+(Vec2 o) const { return {x + o.x, y + o.y}; }
-    NPT_HD Vec2 operator-(Vec2 o) const { return {x - o.x, y - o.y}; }
-    NPT_HD Vec2 operator*(float s) const { return {x * s, y * s}; }
+    NPT_HD NPT_INLINE constexpr Vec2(float x_, float y_) : x(x_), y(y_) {}
+    NPT_HD NPT_INLINE Vec2 operator+(Vec2 o) const { return {x + o.x, y + o.y}; }
+    NPT_HD NPT_INLINE Vec2 operator-(Vec2 o) const { return {x - o.x, y - o.y}; }
+    NPT_HD NPT_INLINE Vec2 operator*(float s) const { return {x * s, y * s}; }
 };
 
 struct Vec3 {
     float x = 0, y = 0, z = 0;
     constexpr Vec3() = default;
-    NPT_HD constexpr explicit Vec3(float s) : x(s), y(s), z(s) {}
-    NPT_HD constexpr Vec3(float x_, float y_, float z_) : x(x_), y(y_), z(z_) {}
-    NPT_HD float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
-    NPT_HD float& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
-    NPT_HD Vec3 operator-() const { return {-x, -y, -z}; }
-    NPT_HD Vec3 operator+(Vec3 o) const { return {x + o.x, y + o.y, z + o.z}; }
-    NPT_HD Vec3 operator-(Vec3 o) const { return {x - o.x, y - o.y, z - o.z}; }
-    NPT_HD Vec3 operator*(Vec3 o) const { return {x * o.x, y * o.y, z * o.z}; }
-    NPT_HD Vec3 operator/(Vec3 o) const { return {x / o.x, y / o.y, z / o.z}; }
-    NPT_HD Vec3 operator*(float s) const { return {x * s, y * s, z * s}; }
-    NPT_HD Vec3 operator/(float s) const { return *this * (1.0f / s); }
-    NPT_HD Vec3& operator+=(Vec3 o) { x += o.x; y += o.y; z += o.z; return *this; }
-    NPT_HD Vec3& operator-=(Vec3 o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
-    NPT_HD Vec3& operator*=(Vec3 o) { x *= o.x; y *= o.y; z *= o.z; return *this; }
-    NPT_HD Vec3& operator*=(float s) { x *= s; y *= s; z *= s; return *this; }
+    NPT_HD NPT_INLINE constexpr explicit Vec3(float s) : x(s), y(s), z(s) {}
+    NPT_HD NPT_INLINE constexpr Vec3(float x_, float y_, float z_) : x(x_), y(y_), z(z_) {}
+    NPT_HD NPT_INLINE float operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+    NPT_HD NPT_INLINE float& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
+    NPT_HD NPT_INLINE Vec3 operator-() const { return {-x, -y, -z}; }
+    NPT_HD NPT_INLINE Vec3 operator+(Vec3 o) const { return {x + o.x, y + o.y, z + o.z}; }
+    NPT_HD NPT_INLINE Vec3 operator-(Vec3 o) const { return {x - o.x, y - o.y, z - o.z}; }
+    NPT_HD NPT_INLINE Vec3 operator*(Vec3 o) const { return {x * o.x, y * o.y, z * o.z}; }
+    NPT_HD NPT_INLINE Vec3 operator/(Vec3 o) const { return {x / o.x, y / o.y, z / o.z}; }
+    NPT_HD NPT_INLINE Vec3 operator*(float s) const { return {x * s, y * s, z * s}; }
+    NPT_HD NPT_INLINE Vec3 operator/(float s) const { return *this * (1.0f / s); }
+    NPT_HD NPT_INLINE Vec3& operator+=(Vec3 o) { x += o.x; y += o.y; z += o.z; return *this; }
+    NPT_HD NPT_INLINE Vec3& operator-=(Vec3 o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
+    NPT_HD NPT_INLINE Vec3& operator*=(Vec3 o) { x *= o.x; y *= o.y; z *= o.z; return *this; }
+    NPT_HD NPT_INLINE Vec3& operator*=(float s) { x *= s; y *= s; z *= s; return *this; }
 };
 using Rgb = Vec3;
 
@@ -77,13 +77,13 @@ NPT_HD NPT_INLINE Vec3 reflect(Vec3 wo, Vec3 n) { return n * (2.0f * dot(wo, n))
 struct Ray {
     Vec3 o;
     Vec3 d;
-    NPT_HD Vec3 at(float t) const { return o + d * t; }
+    NPT_HD NPT_INLINE Vec3 at(float t) const { return o + d * t; }
 };
 
 // Orthonormal frame with z = n (Duff et al. 2017, "Building an orthonormal basis, revisited").
 struct Frame {
     Vec3 s, t, n;
-    NPT_HD static Frame from_z(Vec3 n) {
+    NPT_HD NPT_INLINE static Frame from_z(Vec3 n) {
         float sign = copysignf(1.0f, n.z);
         float a = -1.0f / (sign + n.z);
         float b = n.x * n.y * a;
@@ -93,8 +93,8 @@ struct Frame {
         f.n = n;
         return f;
     }
-    NPT_HD Vec3 to_local(Vec3 v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
-    NPT_HD Vec3 to_world(Vec3 v) const { return s * v.x + t * v.y + n * v.z; }
+    NPT_HD NPT_INLINE Vec3 to_local(Vec3 v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
+    NPT_HD NPT_INLINE Vec3 to_world(Vec3 v) const { return s * v.x + t * v.y + n * v.z; }
 };
 
 }  // namespace npt

@@ -30,11 +30,11 @@ struct GridView {
     const Vec3* color = nullptr;     // same layout; linear RGB
     Affine3 local_to_index;
 
-    NPT_HD bool valid() const { return nx > 0 && ny > 0 && nz > 0 && density && color; }
-    NPT_HD size_t index(int i, int j, int k) const {
+    NPT_HD NPT_INLINE bool valid() const { return nx > 0 && ny > 0 && nz > 0 && density && color; }
+    NPT_HD NPT_INLINE size_t index(int i, int j, int k) const {
         return (size_t(k) * size_t(ny) + size_t(j)) * size_t(nx) + size_t(i);
     }
-    NPT_HD bool inside(int i, int j, int k) const {
+    NPT_HD NPT_INLINE bool inside(int i, int j, int k) const {
         return i >= 0 && j >= 0 && k >= 0 && i < nx && j < ny && k < nz;
     }
 };
