@@ -22,14 +22,6 @@ float number_field(const nlohmann::json& v, const char* key, float fallback, con
     return float(d);
 }
 
-Affine3 to_affine(const Mat4& m) {
-    Affine3 a;
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) a.m[r * 3 + c] = float(m.m[size_t(r)][size_t(c)]);
-    a.t = Vec3(float(m.m[0][3]), float(m.m[1][3]), float(m.m[2][3]));
-    return a;
-}
-
 }  // namespace
 
 VolumeDesc parse_volume_desc(const std::string& extras_json, const std::string& where) {
@@ -80,7 +72,7 @@ VolumeSet::VolumeSet(const scene::Scene& scene) {
 
         Mat4 world_to_local = inst.local_to_world.inverse();
         VolumeView v;
-        v.world_to_local = to_affine(world_to_local);
+        v.world_to_local = affine_from(world_to_local);
         v.local_min = inst.local_min;
         v.local_max = inst.local_max;
         v.density_scale = desc.density_scale;

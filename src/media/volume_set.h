@@ -7,6 +7,7 @@
 
 #include "core/platform.h"
 #include "media/majorant.h"
+#include "media/placement.h"
 #include "media/volume.h"
 #include "media/volume_grid.h"
 #include "scene/scene.h"

@@ -13,10 +13,12 @@
 #include <random>
 
 #include "core/sobol_sampler.h"
+#include "core/transform.h"
 #include "lights/light.h"
 #include "lights/light_set.h"
 #include "materials/bsdf.h"
-#include "media/volume_set.h"
+#include "media/majorant.h"
+#include "media/placement.h"
 #include "render/camera.h"
 #include "render/gpu/shared_math_check.h"
 #include "scene/scene.h"
@@ -163,9 +165,7 @@ TEST(SharedMathGpu, VolumeIntegrationMatchesCpu) {
     Mat4 w2l = (Mat4::translation(0.2, 0.5, -0.3) * Mat4::rotation_quat(0.1, 0.3, 0.2, 0.9) *
                 Mat4::scale(0.6, 0.4, 0.5))
                    .inverse();
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) v.world_to_local.m[r * 3 + c] = float(w2l.m[size_t(r)][size_t(c)]);
-    v.world_to_local.t = Vec3(float(w2l.m[0][3]), float(w2l.m[1][3]), float(w2l.m[2][3]));
+    v.world_to_local = media::affine_from(w2l);
     std::vector<media::VolumeView> views = {v};
 
     std::vector<gpu::VolumeCase> cases;

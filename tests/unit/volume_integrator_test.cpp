@@ -19,14 +19,6 @@
 namespace npt::media {
 namespace {
 
-Affine3 to_affine(const Mat4& m) {
-    Affine3 a;
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) a.m[r * 3 + c] = float(m.m[size_t(r)][size_t(c)]);
-    a.t = Vec3(float(m.m[0][3]), float(m.m[1][3]), float(m.m[2][3]));
-    return a;
-}
-
 // A grid that owns its data; `fill(i, j, k)` gives density and colour per voxel. The grid covers local
 // [-1.5, 1.5]^3 with n voxels per axis at cell corners, so the cube [-1, 1]^3 sees no fall-off at its faces.
 struct TestVolume {
@@ -50,7 +42,7 @@ struct TestVolume {
         grid.local_to_index.m[0] = grid.local_to_index.m[4] = grid.local_to_index.m[8] = s;
         grid.local_to_index.t = Vec3(1.5f * s);
         majorant = build_majorant(grid, &mx, &my, &mz);
-        view.world_to_local = to_affine(local_to_world.inverse());
+        view.world_to_local = affine_from(local_to_world.inverse());
         view.grid = grid.view();
         view.majorant = MajorantView{mx, my, mz, majorant.data()};
         view.density_scale = density_scale;
@@ -182,9 +174,10 @@ TEST(VolumeIntegrator, OverlappingVolumesCombineExactly) {
 }
 
 // A varying field (random voxels, the roughest trilinear field there is): averaged over stratified lattice
-// offsets, the march converges to a float64 quadrature of the trilinear field (100000 midpoint steps) at second
-// order in the step (the midpoint rule across voxel kinks): each halving of the step must cut the error at least
-// 2.5x, and at 1/8 voxel it is below 1e-3. (Measured: 1.5e-2, 5.9e-3, 1.9e-3, 4.9e-4 at 1, 1/2, 1/4, 1/8 voxel.)
+// offsets, the march converges to a float64 quadrature of the trilinear field (100000 midpoint steps) at
+// second order in the step (the midpoint rule across voxel kinks): each halving of the step must cut the
+// error at least 2.5x, and at 1/8 voxel it is below 1e-3. (Measured: 1.5e-2, 5.9e-3, 1.9e-3, 4.9e-4 at 1,
+// 1/2, 1/4, 1/8 voxel.)
 TEST(VolumeIntegrator, VaryingFieldConvergesToQuadrature) {
     uint32_t state = 12345;
     auto rnd = [&]() {
