@@ -10,6 +10,7 @@
 #include "render/cpu/embree_scene.h"
 #include "render/scene_data.h"
 #include "scene/scene.h"
+#include "scene_builders.h"
 
 namespace npt::render {
 namespace {
@@ -48,15 +49,6 @@ scene::Mesh make_sphere(Vec3 centre, float radius, int material) {
                 }
             }
     }
-    return m;
-}
-
-scene::Mesh make_quad(Vec3 corner, Vec3 edge_u, Vec3 edge_v, int material) {
-    scene::Mesh m;
-    m.name = "quad";
-    m.material = material;
-    m.positions = {corner, corner + edge_u, corner + edge_u + edge_v, corner + edge_v};
-    m.indices = {0, 1, 2, 0, 2, 3};  // front face along cross(edge_u, edge_v)
     return m;
 }
 
@@ -136,7 +128,7 @@ TEST(PathIntegrator, WhiteFurnaceGgxConductor) {
 TEST(PathIntegrator, LambertPlaneUnderUniformSkyReturnsAlbedo) {
     scene::Scene s;
     s.materials = {lambert({0.5f, 0.25f, 0.8f})};
-    s.meshes = {make_quad({-50, 0, 50}, {100, 0, 0}, {0, 0, -100}, 0)};
+    s.meshes = {test::make_quad({-50, 0, 50}, {100, 0, 0}, {0, 0, -100}, 0)};
     s.environment.color = Rgb(1.0f);
     PathSettings ps;
     Estimate e = estimate(s, {{0.3f, 2.0f, 0.1f}, normalize(Vec3(0.2f, -1.0f, 0.1f))}, 20000, ps);
@@ -154,8 +146,8 @@ TEST(PathIntegrator, MisEqualsBsdfOnlyAndLightOnly) {
     lamp.specular = 0.0f;
     lamp.metallic = 0.0f;
     s.materials = {lambert({0.7f, 0.7f, 0.7f}), lamp};
-    s.meshes = {make_quad({-5, 0, 5}, {10, 0, 0}, {0, 0, -10}, 0),
-                make_quad({-0.5f, 2.0f, -0.5f}, {0, 0, 1}, {1, 0, 0}, 1)};  // faces down
+    s.meshes = {test::make_quad({-5, 0, 5}, {10, 0, 0}, {0, 0, -10}, 0),
+                test::make_quad({-0.5f, 2.0f, -0.5f}, {0, 0, 1}, {1, 0, 0}, 1)};  // faces down
     scene::Texture sky;
     sky.width = 16;
     sky.height = 8;

@@ -13,6 +13,7 @@
 #include "render/path_integrator.h"
 #include "render/scene_data.h"
 #include "scene/scene.h"
+#include "scene_builders.h"
 #include "test_support.h"
 
 namespace npt::render {
@@ -27,15 +28,6 @@ std::filesystem::path write_constant_raw(const std::filesystem::path& dir, float
         f.write(reinterpret_cast<const char*>(v), sizeof v);
     }
     return path;
-}
-
-scene::Mesh quad(Vec3 corner, Vec3 u, Vec3 v, int material) {
-    scene::Mesh m;
-    m.name = "quad";
-    m.material = material;
-    m.positions = {corner, corner + u, corner + u + v, corner + v};
-    m.indices = {0, 1, 2, 0, 2, 3};
-    return m;
 }
 
 // A cube [-1, 1]^3 scaled by `half` and moved to `centre`: side 2 * half.
@@ -108,7 +100,7 @@ TEST(VolumeRender, SeenInAMirrorAndClippedByASurfaceInside) {
     s.materials = {mirror, black};
     // Mirror plane x = 1 facing -x; the volume at the origin; the camera looks at the mirror from (0.5, 0,
     // 3).
-    s.meshes = {quad({1, -5, 5}, {0, 10, 0}, {0, 0, -10}, 0)};
+    s.meshes = {test::make_quad({1, -5, 5}, {0, 10, 0}, {0, 0, -10}, 0)};
     s.volumes = {cube({0, 0, 0}, 0.25f, f.extras(), f.dir)};
     Vec3 eye{0.5f, 0.0f, 3.0f};
     // Aim at the mirror point whose reflection passes through the volume centre: the reflected ray leaves the
@@ -125,7 +117,7 @@ TEST(VolumeRender, SeenInAMirrorAndClippedByASurfaceInside) {
     expect_rgb(trace(s, ray), f.linear() * (1 - t), "mirror");
 
     // A black wall through the cube's centre plane z = 0 (facing +z): only the front half glows.
-    s.meshes = {quad({-5, -5, 0}, {10, 0, 0}, {0, 10, 0}, 1)};
+    s.meshes = {test::make_quad({-5, -5, 0}, {10, 0, 0}, {0, 10, 0}, 1)};
     s.materials = {black, black};
     t = std::exp(-f.sigma * 0.25f);
     expect_rgb(trace(s, {{0.05f, 0.05f, 3}, {0, 0, -1}}), f.linear() * (1 - t), "clipped");
@@ -140,7 +132,7 @@ TEST(VolumeRender, CastsShadowsOnlyWhenAsked) {
     floor.metallic = 0.0f;
     floor.specular = 0.0f;
     s.materials = {floor};
-    s.meshes = {quad({-5, 0, 5}, {10, 0, 0}, {0, 0, -10}, 0)};
+    s.meshes = {test::make_quad({-5, 0, 5}, {10, 0, 0}, {0, 0, -10}, 0)};
     scene::PunctualLight sun;
     sun.type = scene::PunctualType::Directional;
     sun.direction = {0, -1, 0};
