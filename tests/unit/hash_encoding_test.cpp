@@ -237,6 +237,14 @@ TEST(HashEncoding, DenseOrHashedFollowsTableSize) {
     cfg.log2_table_size = 12;
     EXPECT_FALSE(hash_level(cfg, 0).dense);
 
+    // The boundary: base 15 gives scale 14, 16 vertices, 16^3 = 4096 = T entries, which still fit densely.
+    HashGridConfig edge = small_config();
+    edge.base_resolution = 15;
+    EXPECT_EQ(hash_level(edge, 0).vertices, 16u);
+    EXPECT_TRUE(hash_level(edge, 0).dense);
+    edge.log2_table_size = 11;
+    EXPECT_FALSE(hash_level(edge, 0).dense);
+
     // Dense indexing is a bijection onto [0, V^3); hashed indexing is the documented hash.
     HashGridConfig small = small_config();
     const HashLevel lv0 = hash_level(small, 0);
