@@ -5,6 +5,8 @@
 #include "core/sobol_sampler.h"
 #include "lights/light.h"
 #include "materials/bsdf.h"
+#include "nerf/hash_encoding.h"
+#include "nerf/sh_encoding.h"
 #include "render/camera.h"
 #include "render/gpu/device_buffer.h"
 #include "render/gpu/shared_math_check.h"
@@ -113,6 +115,17 @@ private:
 };
 
 }  // namespace
+
+// Not launched yet: compiling it keeps the NeRF encodings device-clean until the CUDA trainer (issue 5) uses them.
+__global__ void nerf_encoding_kernel(nerf::HashGridConfig cfg, const float* params, const Vec3* points, float* out,
+                                     float* d_params, size_t n) {
+    size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i >= n) return;
+    float features[64];
+    nerf::hash_encode(cfg, params, points[i], features);
+    nerf::hash_encode_backward(cfg, points[i], features, d_params);
+    nerf::sh_encode_deg4(normalize(points[i]), out + i * nerf::k_sh_deg4_dims);
+}
 
 bool device_available() {
     int count = 0;
