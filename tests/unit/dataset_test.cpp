@@ -1,0 +1,261 @@
+// transforms.json loading: a small data set written here (cameras, names, exact pixel bytes), pixel rays
+// against hand-computed values, the camera_angle_x focal length, every bad input's message, and the shared
+// lego set.
+#include "nerf/dataset.h"
+
+#include <gtest/gtest.h>
+#include <stb_image_write.h>
+
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "test_support.h"
+
+namespace npt::nerf {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A byte pattern that differs per frame, pixel and channel, so a misplaced image or channel shows.
+uint8_t pattern(size_t frame, size_t pixel, size_t channel) {
+    return uint8_t((frame * 37 + pixel * 11 + channel * 3 + 5) % 256);
+}
+
+void write_test_png(const fs::path& path, size_t frame, int w, int h, int channels) {
+    std::vector<uint8_t> px(size_t(w) * size_t(h) * size_t(channels));
+    for (size_t p = 0; p < size_t(w) * size_t(h); ++p)
+        for (size_t c = 0; c < size_t(channels); ++c) px[p * size_t(channels) + c] = pattern(frame, p, c);
+    fs::create_directories(path.parent_path());
+    ASSERT_NE(stbi_write_png(path.string().c_str(), w, h, channels, px.data(), w * channels), 0);
+}
+
+const char* k_identity = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+
+// One frame with an identity pose and a 4x3 image, the base that the bad-input tests break one field of.
+fs::path write_one_frame(const fs::path& dir, const std::string& frame_extra = "",
+                         const std::string& matrix = k_identity, const std::string& global = "\"fl_x\": 5,") {
+    write_test_png(dir / "a.png", 0, 4, 3, 4);
+    const fs::path json = dir / "transforms.json";
+    test::write_file(json, "{" + global + " \"frames\": [{\"file_path\": \"a\", " + frame_extra +
+                               "\"transform_matrix\": " + matrix + "}]}");
+    return json;
+}
+
+TEST(Dataset, LoadsSmallDataset) {
+    const fs::path dir = test::temp_dir();
+    write_test_png(dir / "a.png", 0, 4, 3, 4);
+    write_test_png(dir / "b.png", 1, 4, 3, 4);
+    write_test_png(dir / "sub" / "c.png", 2, 4, 3, 3);  // RGB: alpha must come back as 255
+    test::write_file(dir / "transforms_train.json", R"({
+        "fl_x": 5, "fl_y": 6, "cx": 2.25, "cy": 1.25, "k1": 0.1, "k2": -0.2, "p1": 0.01, "p2": -0.02,
+        "aabb_scale": 4,
+        "frames": [
+          {"file_path": "./a", "transform_matrix": [[1,0,0,1],[0,1,0,2],[0,0,1,3],[0,0,0,1]]},
+          {"file_path": "b.png", "fl_x": 7, "transform_matrix": [[0,0,1,-1],[0,1,0,0],[-1,0,0,4],[0,0,0,1]]},
+          {"file_path": "sub/c", "transform_matrix": [[1,0,0,0],[0,0,-1,0],[0,1,0,0],[0,0,0,1]]}
+        ]})");
+    std::vector<size_t> calls;
+    const Dataset ds = load_dataset(dir, "train", [&](size_t done, size_t total) {
+        EXPECT_EQ(total, 3u);
+        calls.push_back(done);
+    });
+    ASSERT_EQ(ds.cameras.size(), 3u);
+    EXPECT_EQ(ds.names, (std::vector<std::string>{"./a", "b.png", "sub/c"}));
+    EXPECT_EQ(ds.width, 4);
+    EXPECT_EQ(ds.height, 3);
+    EXPECT_EQ(ds.aabb_scale, 4.0f);
+    EXPECT_FLOAT_EQ(ds.scale, 0.33f);  // instant-ngp's defaults when the json has none
+    test::expect_near(ds.offset, Vec3(0.5f, 0.5f, 0.5f), 0.0f);
+    EXPECT_EQ(calls, (std::vector<size_t>{1, 2, 3}));  // serialised, so `done` counts up
+
+    const Camera& c0 = ds.cameras[0];
+    EXPECT_EQ(c0.fx, 5.0f);
+    EXPECT_EQ(c0.fy, 6.0f);
+    EXPECT_EQ(c0.cx, 2.25f);
+    EXPECT_EQ(c0.cy, 1.25f);
+    EXPECT_EQ(c0.width, 4);
+    EXPECT_EQ(c0.height, 3);
+    EXPECT_FLOAT_EQ(c0.k1, 0.1f);
+    EXPECT_FLOAT_EQ(c0.k2, -0.2f);
+    EXPECT_FLOAT_EQ(c0.p1, 0.01f);
+    EXPECT_FLOAT_EQ(c0.p2, -0.02f);
+    EXPECT_EQ(c0.camera_to_world.m[0][3], 1.0);
+    EXPECT_EQ(c0.camera_to_world.m[2][3], 3.0);
+    EXPECT_EQ(ds.cameras[1].fx, 7.0f);  // the frame's value wins over the global one
+    EXPECT_EQ(ds.cameras[1].fy, 6.0f);
+    EXPECT_EQ(ds.cameras[1].camera_to_world.m[2][0], -1.0);
+    EXPECT_EQ(ds.cameras[2].camera_to_world.m[1][2], -1.0);
+
+    ASSERT_EQ(ds.rgba.size(), 3u * 4 * 3 * 4);
+    for (size_t f = 0; f < 3; ++f)
+        for (size_t p = 0; p < 12; ++p)
+            for (size_t c = 0; c < 4; ++c) {
+                const uint8_t want = (f == 2 && c == 3) ? 255 : pattern(f, p, c);
+                ASSERT_EQ(ds.image(f)[p * 4 + c], want)
+                    << "frame " << f << " pixel " << p << " channel " << c;
+            }
+}
+
+TEST(Dataset, JsonFileGivenDirectly) {
+    const fs::path dir = test::temp_dir();
+    const fs::path json = write_one_frame(dir);
+    const Dataset ds = load_dataset(json, "ignored");
+    EXPECT_EQ(ds.cameras.size(), 1u);
+    // A folder with an empty split reads transforms.json.
+    EXPECT_EQ(load_dataset(dir, "").cameras.size(), 1u);
+}
+
+TEST(Dataset, PixelRay) {
+    Camera cam;
+    cam.fx = 5;
+    cam.fy = 6;
+    cam.cx = 2;
+    cam.cy = 1.5f;
+    cam.width = 4;
+    cam.height = 3;
+    // 90 degrees about +Y (camera -Z looks down world -X), then a move to (1, 2, 3).
+    cam.camera_to_world.m = {{{0, 0, 1, 1}, {0, 1, 0, 2}, {-1, 0, 0, 3}, {0, 0, 0, 1}}};
+
+    const Ray centre = generate_pixel_ray(cam, cam.cx, cam.cy);
+    test::expect_near(centre.o, Vec3(1, 2, 3), 0.0f);
+    test::expect_near(centre.d, Vec3(-1, 0, 0), 1e-6f);  // the camera's -Z axis in world space
+
+    // The top-left pixel's centre: camera direction ((0.5-2)/5, -(0.5-1.5)/6, -1) = (-0.3, 1/6, -1), which
+    // the rotation maps to (z, y, -x) = (-1, 1/6, 0.3).
+    const Ray corner = generate_pixel_ray(cam, 0.5f, 0.5f);
+    const float len = std::sqrt(1.0f + 1.0f / 36.0f + 0.09f);
+    test::expect_near(corner.o, Vec3(1, 2, 3), 0.0f);
+    test::expect_near(corner.d, Vec3(-1.0f / len, (1.0f / 6.0f) / len, 0.3f / len), 1e-6f);
+}
+
+TEST(Dataset, CameraAngleGivesFocalLength) {
+    const fs::path dir = test::temp_dir();
+    const double ax = 0.75, ay = 0.5;  // exact in std::to_string's 6 decimals
+    write_one_frame(
+        dir, "", k_identity,
+        "\"camera_angle_x\": " + std::to_string(ax) + ", \"camera_angle_y\": " + std::to_string(ay) + ",");
+    const Camera c = load_dataset(dir, "").cameras[0];
+    EXPECT_FLOAT_EQ(c.fx, float(0.5 * 4 / std::tan(0.5 * ax)));
+    EXPECT_FLOAT_EQ(c.fy, float(0.5 * 3 / std::tan(0.5 * ay)));
+    EXPECT_EQ(c.cx, 2.0f);  // principal point defaults to the image centre
+    EXPECT_EQ(c.cy, 1.5f);
+
+    // Without camera_angle_y pixels are square.
+    const fs::path dir2 = test::temp_dir() / "x";
+    write_one_frame(dir2, "", k_identity, "\"camera_angle_x\": " + std::to_string(ax) + ",");
+    const Camera c2 = load_dataset(dir2, "").cameras[0];
+    EXPECT_EQ(c2.fy, c2.fx);
+}
+
+TEST(Dataset, BadInputs) {
+    const fs::path dir = test::temp_dir();
+    auto load = [](const fs::path& p) { return [p] { load_dataset(p, ""); }; };
+
+    test::expect_error_message([&] { load_dataset(dir, "val"); }, {"transforms_val.json", "file not found"});
+
+    test::write_file(dir / "bad" / "transforms.json", "{\"frames\": [");
+    test::expect_error_message(load(dir / "bad"), {"transforms.json", "malformed JSON"});
+
+    test::write_file(dir / "empty" / "transforms.json", "{\"fl_x\": 5, \"frames\": []}");
+    test::expect_error_message(load(dir / "empty"), {"transforms.json", "'frames' is empty"});
+    test::write_file(dir / "noframes" / "transforms.json", "{\"fl_x\": 5}");
+    test::expect_error_message(load(dir / "noframes"), {"transforms.json", "missing 'frames'"});
+
+    write_one_frame(dir / "nomat", "", "null");
+    test::write_file(dir / "nomat" / "transforms.json", R"({"fl_x": 5, "frames": [{"file_path": "a"}]})");
+    test::expect_error_message(load(dir / "nomat"),
+                               {"transforms.json", "frame 0 ('a')", "'transform_matrix'"});
+
+    write_one_frame(dir / "shape", "", "[[1,0,0,0],[0,1,0,0],[0,0,1,0]]");
+    test::expect_error_message(load(dir / "shape"), {"transforms.json", "frame 0", "4x4"});
+    write_one_frame(dir / "type", "", "[[1,0,0,0],[0,1,0,0],[0,0,1,\"x\"],[0,0,0,1]]");
+    test::expect_error_message(load(dir / "type"), {"transforms.json", "frame 0", "4x4"});
+
+    // JSON has no NaN: nlohmann writes it as null, Python as a bare NaN (not JSON); an overflowing literal
+    // would be Inf, which nlohmann refuses while parsing.
+    write_one_frame(dir / "nan", "", "[[1,0,0,0],[0,null,0,0],[0,0,1,0],[0,0,0,1]]");
+    test::expect_error_message(load(dir / "nan"), {"transforms.json", "frame 0", "NaN", "row 1, column 1"});
+    write_one_frame(dir / "pynan", "", "[[1,0,0,0],[0,NaN,0,0],[0,0,1,0],[0,0,0,1]]");
+    test::expect_error_message(load(dir / "pynan"), {"transforms.json", "malformed JSON"});
+    write_one_frame(dir / "inf", "", "[[1,0,0,0],[0,1,0,0],[0,0,1,1e999],[0,0,0,1]]");
+    test::expect_error_message(load(dir / "inf"), {"transforms.json", "malformed JSON", "1e999"});
+
+    write_one_frame(dir / "nointr", "", k_identity, "");
+    test::expect_error_message(
+        load(dir / "nointr"), {"transforms.json", "frame 0", "missing intrinsics", "fl_x", "camera_angle_x"});
+    write_one_frame(dir / "strfl", "", k_identity, "\"fl_x\": \"5\",");
+    test::expect_error_message(load(dir / "strfl"), {"transforms.json", "'fl_x' must be a number"});
+
+    write_one_frame(dir / "noimg");
+    test::write_file(
+        dir / "noimg" / "transforms.json",
+        std::string(R"({"fl_x": 5, "frames": [{"file_path": "./missing", "transform_matrix": )") +
+            k_identity + "}]}");
+    test::expect_error_message(load(dir / "noimg"),
+                               {"transforms.json", "frame 0 ('./missing')", "image not found", "missing.png",
+                                "missing.jpg", "missing.jpeg"});
+
+    // A second frame of another size: the message names that frame and both sizes.
+    write_one_frame(dir / "size");
+    write_test_png(dir / "size" / "b.png", 1, 5, 3, 4);
+    test::write_file(dir / "size" / "transforms.json",
+                     std::string(R"({"fl_x": 5, "frames": [{"file_path": "a", "transform_matrix": )") +
+                         k_identity + R"(}, {"file_path": "b", "transform_matrix": )" + k_identity + "}]}");
+    test::expect_error_message(load(dir / "size"),
+                               {"transforms.json", "frame 1 ('b')", "b.png", "5x3", "first frame's is 4x3"});
+
+    // 'w'/'h' that disagree with the image.
+    write_one_frame(dir / "wh", "\"w\": 8, ", k_identity);
+    test::expect_error_message(load(dir / "wh"), {"transforms.json", "frame 0", "'w'/'h'", "8x3"});
+
+    // Zero-size images: an empty file, and a PNG whose header says 0 pixels wide (stb does not check CRCs;
+    // its '0-pixel image' reason is overwritten by the other decoders it tries).
+    write_one_frame(dir / "zero");
+    test::write_file(dir / "zero" / "a.png", "");
+    test::expect_error_message(load(dir / "zero"), {"transforms.json", "frame 0", "a.png", "empty"});
+    const std::string zero_png = std::string("\x89PNG\r\n\x1a\n", 8) + std::string("\0\0\0\x0dIHDR", 8) +
+                                 std::string("\0\0\0\0\0\0\0\x03\x08\x06\0\0\0", 13) + std::string(4, '\0');
+    test::write_file(dir / "zero" / "a.png", zero_png);
+    test::expect_error_message(load(dir / "zero"),
+                               {"transforms.json", "frame 0", "a.png", "not a readable image"});
+}
+
+TEST(Dataset, LegoTrainSplit) {
+    const fs::path lego = test::shared_data() / "nerf_synthetic" / "lego";
+    NPT_REQUIRE_SHARED(lego / "transforms_train.json");
+    const auto t0 = std::chrono::steady_clock::now();
+    const Dataset ds = load_dataset(lego, "train");
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    RecordProperty("load_seconds", std::to_string(seconds));
+    std::printf("lego train: 100 frames loaded in %.2f s\n", seconds);
+
+    ASSERT_EQ(ds.cameras.size(), 100u);
+    EXPECT_EQ(ds.width, 400);
+    EXPECT_EQ(ds.height, 400);
+    EXPECT_EQ(ds.rgba.size(), 100u * 400 * 400 * 4);
+    EXPECT_EQ(ds.names[0], "./train/r_0");
+    const Camera& c = ds.cameras[0];
+    // fx = 0.5 * 400 / tan(0.5 * camera_angle_x); float rounding of the result is the tolerance.
+    const double fx = 0.5 * 400 / std::tan(0.5 * 0.6911112070083618);
+    EXPECT_NEAR(c.fx, fx, 1e-6 * fx);
+    EXPECT_NEAR(c.fx, 555.555, 0.01);
+    EXPECT_EQ(c.fy, c.fx);
+    const Ray r = generate_pixel_ray(c, c.cx, c.cy);
+    test::expect_near(r.o,
+                      Vec3(float(c.camera_to_world.m[0][3]), float(c.camera_to_world.m[1][3]),
+                           float(c.camera_to_world.m[2][3])),
+                      0.0f);
+    // NeRF-synthetic renders have a transparent background: some alpha must be 0, some 255.
+    bool has_clear = false, has_opaque = false;
+    for (size_t p = 0; p < 400 * 400; ++p) {
+        has_clear |= ds.image(0)[4 * p + 3] == 0;
+        has_opaque |= ds.image(0)[4 * p + 3] == 255;
+    }
+    EXPECT_TRUE(has_clear && has_opaque);
+}
+
+}  // namespace
+}  // namespace npt::nerf
