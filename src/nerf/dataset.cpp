@@ -10,6 +10,7 @@
 #include <fstream>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <optional>
 #include <sstream>
 
@@ -174,7 +175,7 @@ Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, c
         if (!s.fl_x && !s.angle_x)
             throw Error(where + ": missing intrinsics: neither 'fl_x' nor 'camera_angle_x' is given");
         for (auto a : {s.angle_x, s.angle_y})
-            if (a && (*a <= 0 || *a >= M_PI))
+            if (a && (*a <= 0 || *a >= std::numbers::pi))
                 throw Error(where + ": 'camera_angle_x'/'camera_angle_y' must be in (0, pi) radians");
         for (auto f : {s.fl_x, s.fl_y})
             if (f && *f <= 0) throw Error(where + ": 'fl_x'/'fl_y' must be positive");

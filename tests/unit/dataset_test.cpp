@@ -243,6 +243,10 @@ TEST(Dataset, LegoTrainSplit) {
     EXPECT_NEAR(c.fx, fx, 1e-6 * fx);
     EXPECT_NEAR(c.fx, 555.555, 0.01);
     EXPECT_EQ(c.fy, c.fx);
+    // The matrix's last column as written in transforms_train.json, frame 0.
+    EXPECT_DOUBLE_EQ(c.camera_to_world.m[0][3], -0.05379832163453102);
+    EXPECT_DOUBLE_EQ(c.camera_to_world.m[1][3], 3.845470428466797);
+    EXPECT_DOUBLE_EQ(c.camera_to_world.m[2][3], 1.2080823183059692);
     const Ray r = generate_pixel_ray(c, c.cx, c.cy);
     test::expect_near(r.o,
                       Vec3(float(c.camera_to_world.m[0][3]), float(c.camera_to_world.m[1][3]),
