@@ -1,6 +1,8 @@
 // Renders the shared reference scenes at their reference resolution and prints time, samples/s and the error
 // against the Cycles reference as a table (results go to docs/benchmarks.md).
 //   render_bench [--spp N] [--threads N] [--scene NAME]...   (default: cornell, 64 spp, all threads)
+#include <tbb/task_arena.h>
+
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -74,8 +76,9 @@ int main(int argc, char** argv) {
             ImageComparison c = compare_images(img, ref);
             double samples = double(o.width) * o.height * o.spp;
             std::printf("| %s | %dx%d | %d | %d | %.3f | %.3f | %.3f | %.3g |\n", name.c_str(), o.width,
-                        o.height, o.spp, threads, std::chrono::duration<double>(t1 - t0).count(), best,
-                        samples / best * 1e-6, c.rel_mse);
+                        o.height, o.spp, threads > 0 ? threads : tbb::this_task_arena::max_concurrency(),
+                        std::chrono::duration<double>(t1 - t0).count(), best, samples / best * 1e-6,
+                        c.rel_mse);
         }
     } catch (const Error& e) {
         std::fprintf(stderr, "render_bench: %s\n", e.what());

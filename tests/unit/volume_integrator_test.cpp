@@ -174,10 +174,11 @@ TEST(VolumeIntegrator, OverlappingVolumesCombineExactly) {
 }
 
 // A varying field (random voxels, the roughest trilinear field there is): averaged over stratified lattice
-// offsets, the march converges to a float64 quadrature of the trilinear field (100000 midpoint steps) at
-// second order in the step (the midpoint rule across voxel kinks): each halving of the step must cut the
-// error at least 2.5x, and at 1/8 voxel it is below 1e-3. (Measured: 1.5e-2, 5.9e-3, 1.9e-3, 4.9e-4 at 1,
-// 1/2, 1/4, 1/8 voxel.)
+// offsets, the march converges to a float64 quadrature of the trilinear field (100000 midpoint steps), faster
+// than first order: a first-order (e.g. left-point) rule would cut the error 8x over three halvings of the
+// step, the midpoint rule ~64x away from voxel kinks, so we require more than 16x from 1 to 1/8 voxel, the
+// error to shrink at every halving, and below 1e-3 at 1/8 voxel. (Measured: 1.5e-2, 5.9e-3, 1.9e-3, 4.9e-4 at
+// 1, 1/2, 1/4, 1/8 voxel: 31x.)
 TEST(VolumeIntegrator, VaryingFieldConvergesToQuadrature) {
     uint32_t state = 12345;
     auto rnd = [&]() {
@@ -202,7 +203,7 @@ TEST(VolumeIntegrator, VaryingFieldConvergesToQuadrature) {
         for (int k = 0; k < 3; ++k) ref[k] += a * f.color[k];
         log_t -= s * h;
     }
-    double err_prev = 1e9;
+    double err_prev = 1e9, err_first = 0;
     for (float step : {1.0f, 0.5f, 0.25f, 0.125f}) {
         vol.view.step_voxels = step;
         const int m = 64;
@@ -215,10 +216,12 @@ TEST(VolumeIntegrator, VaryingFieldConvergesToQuadrature) {
         double err = std::abs(mean_t - std::exp(log_t)) / std::exp(log_t);
         for (int k = 0; k < 3; ++k) err = std::max(err, std::abs(mean[k] - ref[k]) / ref[k]);
         std::printf("step %.3f voxel: max relative error %.2e\n", step, err);
+        if (step == 1.0f) err_first = err;
         if (step == 0.125f) {
             EXPECT_LT(err, 1e-3);
+            EXPECT_GT(err_first / err, 16.0);
         }
-        EXPECT_LE(err * 2.5, err_prev) << "step " << step;
+        EXPECT_LT(err, err_prev) << "step " << step;
         err_prev = err;
     }
 }
