@@ -1,0 +1,93 @@
+// Everything that defines a NeRF model and how it is trained, as one plain struct that round-trips through
+// JSON (`nerfpt train --config`, and the copy stored in every model file). Defaults follow instant-ngp's
+// published NeRF configuration (configs/nerf/base.json plus the testbed's overrides); the CPU-specific
+// choices (batch size) are marked as such.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "nerf/hash_encoding.h"
+
+namespace npt::nerf {
+
+// A fully connected network without biases (as tiny-cuda-nn's MLPs): `hidden_layers` layers of `width`
+// neurons with ReLU, then a linear output layer; the caller applies the output activation.
+struct MlpConfig {
+    int hidden_layers = 1;
+    int width = 64;
+    int outputs = 16;
+};
+
+struct EncodingConfig {
+    HashGridConfig grid;  // per_level_scale is derived, see finest_resolution
+    // The finest level's resolution is finest_resolution * aabb_scale (instant-ngp: 2048 * aabb_scale);
+    // grid.per_level_scale is recomputed from it when a model is created for a data set.
+    float finest_resolution = 2048.0f;
+    int sh_degree = 4;  // view-direction encoding; only 4 (16 coefficients) is implemented
+};
+
+struct OccupancyConfig {
+    int resolution = 128;         // cells per axis per cascade
+    float decay = 0.95f;          // every update multiplies the stored density by this before taking the max
+    float threshold = 0.01f;      // a cell is occupied when its optical thickness over the minimum step exceeds
+                                  // min(threshold, mean over the grid)
+    int update_interval = 16;     // steps between updates
+    int warmup_steps = 256;       // updates before this step sample every cell; later ones a quarter of them
+};
+
+struct MarchConfig {
+    int max_steps = 1024;            // the minimum step is sqrt(3) / max_steps (instant-ngp's NERF_STEPS)
+    float cone_angle = -1.0f;        // step = clamp(t * cone_angle, min, max); < 0: 1/256 when aabb_scale > 1
+                                     // else 0 (instant-ngp)
+    float min_transmittance = 1e-4f; // a ray stops when its transmittance falls below this
+    int max_samples_per_ray = 1024;  // training samples generated per ray at most
+};
+
+struct OptimizerConfig {
+    float learning_rate = 1e-2f;
+    float beta1 = 0.9f;
+    float beta2 = 0.99f;
+    float epsilon = 1e-15f;
+    float l2_reg = 1e-6f;         // added to the gradient of MLP weights only (not the hash grid)
+    int decay_start = 20000;      // lr *= decay_base ^ floor((step - decay_start) / decay_interval + 1)
+    int decay_interval = 10000;   //   once step >= decay_start
+    float decay_base = 0.33f;
+    float ema_decay = 0.95f;      // evaluation uses the bias-corrected exponential moving average of parameters
+};
+
+struct LossConfig {
+    float huber_delta = 1.0f;  // instant-ngp's Huber with alpha 1: quadratic for |error| < delta
+};
+
+struct TrainingConfig {
+    // Samples per step (after marching; rays are added until the batch is full). instant-ngp uses 2^18 on a
+    // GPU; 2^16 keeps a CPU step under a second so progress and checkpoints stay responsive.
+    int batch_samples = 1 << 16;
+    int max_rays_per_batch = 1 << 14;
+    uint64_t seed = 1337;
+    int checkpoint_interval = 500;  // steps between checkpoints (also on Ctrl-C and at the end)
+    bool random_background = true;  // train against a random colour per ray, so alpha is learned
+};
+
+struct NerfConfig {
+    EncodingConfig encoding;
+    MlpConfig density_mlp{1, 64, 16};  // output 0 is log-density (exp activation); all 16 feed the colour MLP
+    MlpConfig color_mlp{2, 64, 3};     // input: density outputs (16) + SH of the direction (16); sigmoid
+    OccupancyConfig occupancy;
+    MarchConfig march;
+    OptimizerConfig optimizer;
+    LossConfig loss;
+    TrainingConfig training;
+};
+
+// JSON with the same field names as the structs, grouped as {"encoding": {"levels": ...}, ...} (see
+// docs/formats.md). Missing fields keep their defaults; unknown fields, wrong types and out-of-range values
+// throw npt::Error naming `source` (a file name, for messages) and the field.
+NerfConfig config_from_json(const nlohmann::json& j, const std::string& source);
+nlohmann::json config_to_json(const NerfConfig& c);
+NerfConfig load_config(const std::string& path);  // reads the file, then config_from_json
+
+}  // namespace npt::nerf

@@ -1,0 +1,50 @@
+// Read side of the occupancy grid (instant-ngp's density grid), NPT_HD so that training, rendering and the
+// GPU share it. Model space is the unit cube [0,1]^3 centred at 0.5 (instant-ngp's coordinates); cascade c
+// covers the cube of side 2^c centred at 0.5 with `resolution` cells per axis, so each cascade halves the
+// resolution of the one inside it. Cells are stored cascade after cascade, x fastest: index =
+// c * R^3 + x + y * R + z * R^2.
+#pragma once
+
+#include <math.h>
+
+#include <cstdint>
+
+#include "core/platform.h"
+#include "core/vec.h"
+
+namespace npt::nerf {
+
+struct OccupancyGridView {
+    const uint8_t* occupied = nullptr;  // one byte per cell, 0 or 1
+    int cascades = 1;
+    int resolution = 128;
+
+    // The smallest cascade that contains p (clamped to the last one).
+    NPT_HD NPT_INLINE int cascade_of(Vec3 p) const {
+        const float m = fmaxf(fabsf(p.x - 0.5f), fmaxf(fabsf(p.y - 0.5f), fabsf(p.z - 0.5f)));
+        int exponent = 0;
+        frexpf(m, &exponent);  // m in [2^(e-1), 2^e)
+        const int c = exponent + 1;
+        return c < 0 ? 0 : (c > cascades - 1 ? cascades - 1 : c);
+    }
+    NPT_HD NPT_INLINE float cascade_size(int c) const { return float(1 << c); }
+    // Cell index of p in cascade c, or -1 when p lies outside that cascade.
+    NPT_HD NPT_INLINE int64_t cell_index(Vec3 p, int c) const {
+        const float size = cascade_size(c);
+        const float lo = 0.5f - 0.5f * size;
+        int64_t idx[3];
+        for (int a = 0; a < 3; ++a) {
+            const float u = (p[a] - lo) / size * float(resolution);
+            if (!(u >= 0.0f) || u >= float(resolution)) return -1;
+            idx[a] = int64_t(u);
+        }
+        const int64_t r = resolution;
+        return int64_t(c) * r * r * r + idx[0] + idx[1] * r + idx[2] * r * r;
+    }
+    NPT_HD NPT_INLINE bool is_occupied(Vec3 p, int c) const {
+        const int64_t i = cell_index(p, c);
+        return i >= 0 && occupied[i] != 0;
+    }
+};
+
+}  // namespace npt::nerf
