@@ -28,6 +28,13 @@ void InterruptGuard::watch(std::stop_token stop) {
     int sig = 0;
     while (sigwait(&m_signals, &sig) == 0) {
         if (stop.stop_requested()) return;
+        if (m_cooperative && !m_stop_requested) {
+            m_stop_signal = sig;
+            m_stop_requested = true;
+            const char* msg = "\nnerfpt: stopping after this step (interrupt again to quit at once)\n";
+            [[maybe_unused]] auto n = write(STDERR_FILENO, msg, std::strlen(msg));
+            continue;
+        }
         std::lock_guard lock(m_mutex);  // let a file being written finish first
         // Only async-signal-safe calls from here on: other threads may be anywhere, so no exit handlers run.
         const char* msg = sig == SIGINT ? "\nnerfpt: interrupted\n" : "\nnerfpt: terminated\n";

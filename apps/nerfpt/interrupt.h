@@ -5,6 +5,7 @@
 
 #include <signal.h>
 
+#include <atomic>
 #include <mutex>
 #include <thread>
 
@@ -22,9 +23,18 @@ class InterruptGuard {
     // While the returned lock lives, an interrupt is held back (it takes effect when the lock is released).
     std::unique_lock<std::mutex> hold() { return std::unique_lock(m_mutex); }
 
+    // Work that can stop cleanly (training: save a checkpoint, then exit) turns this on: the first interrupt
+    // then only sets stop_requested(); a second one exits at once as usual.
+    void set_cooperative(bool on) { m_cooperative = on; }
+    bool stop_requested() const { return m_stop_requested; }
+    int stop_signal() const { return m_stop_signal; }
+
   private:
     void watch(std::stop_token stop);
 
+    std::atomic<bool> m_cooperative{false};
+    std::atomic<bool> m_stop_requested{false};
+    std::atomic<int> m_stop_signal{0};
     sigset_t m_signals{};
     sigset_t m_old_mask{};
     std::mutex m_mutex;

@@ -68,6 +68,7 @@ struct TrainingState {
     std::vector<float> params;
     AdamState adam;
     double elapsed_seconds = 0;  // training time so far, for --time across resumes
+    uint32_t rays_per_step = 0;  // the adaptive batch size in rays for the next step (0: not yet known)
 };
 
 struct NerfModel {

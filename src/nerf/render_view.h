@@ -1,0 +1,24 @@
+// Renders what a pinhole camera sees of a NeRF model on its own (no scene): for `nerfpt eval` and `nerfpt
+// view`. Rays march through the occupancy grid; the field is evaluated in batches, a growing window of
+// samples per ray at a time, so that rays which become opaque early stop costing work.
+#pragma once
+
+#include <functional>
+
+#include "core/image.h"
+#include "nerf/dataset.h"
+#include "nerf/nerf_model.h"
+
+namespace npt::nerf {
+
+struct ViewOptions {
+    Rgb background{1.0f, 1.0f, 1.0f};  // the literature evaluates NeRF-synthetic on white
+};
+
+// Returns an RGBA image: colour composited over the background, as the training images store it (sRGB-encoded
+// values in [0,1], not linear light), and alpha = 1 - transmittance. `progress(done_rows, rows)` is called
+// from one thread at a time; returning false stops the render early (throws npt::Error("interrupted")).
+Image render_view(const NerfModel& model, const Camera& camera, const ViewOptions& options,
+                  const std::function<bool(size_t, size_t)>& progress = {});
+
+}  // namespace npt::nerf

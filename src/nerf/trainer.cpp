@@ -1,0 +1,247 @@
+#include "nerf/trainer.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/error.h"
+#include "core/rng.h"
+#include "nerf/composite.h"
+#include "nerf/field_batch.h"
+
+namespace npt::nerf {
+
+namespace {
+
+constexpr size_t k_chunk_samples = 2048;  // field evaluation unit: fixed, so results ignore the thread count
+constexpr size_t k_rays_per_task = 256;
+constexpr uint32_t k_initial_rays = 1024;
+
+struct TrainRay {
+    uint32_t first = 0, count = 0;  // samples [first, first + count) of the batch
+    Rgb target, background;
+};
+
+// Huber loss per channel (instant-ngp's, alpha = delta) and its derivative w.r.t. the prediction.
+inline float huber(float diff, float delta, float* grad) {
+    const float a = std::fabs(diff);
+    if (a < delta) {
+        *grad = diff / delta;
+        return 0.5f * diff * diff / delta;
+    }
+    *grad = diff > 0 ? 1.0f : -1.0f;
+    return a - 0.5f * delta;
+}
+
+}  // namespace
+
+Trainer::Trainer(NerfModel& model, const Dataset& data)
+    : m_model(model),
+      m_data(data),
+      m_layout(model.layout()),
+      m_march(model.march_params()),
+      m_adam(model.config.optimizer, m_layout.total, m_layout.density_offset, m_layout.grid_offset) {
+    if (data.cameras.empty()) throw Error("the training set has no frames");
+    if (!model.training) {
+        TrainingState st;
+        st.params = model.params;
+        model.training = std::move(st);
+    }
+    TrainingState& st = *model.training;
+    if (st.params.size() != m_layout.total) throw Error("the model's training state does not match its layout");
+    if (st.adam.step > 0 || !st.adam.m.empty()) m_adam.set_state(st.adam);
+    if (st.rays_per_step == 0) st.rays_per_step = k_initial_rays;
+    m_grads.resize(m_layout.total);
+}
+
+void Trainer::sync_model() {
+    TrainingState& st = *m_model.training;
+    st.adam = m_adam.state();
+    m_model.params.resize(m_layout.total);
+    m_adam.averaged_params(st.params.data(), m_model.params.data());
+}
+
+StepStats Trainer::step() {
+    const auto t0 = std::chrono::steady_clock::now();
+    TrainingState& st = *m_model.training;
+    const NerfConfig& cfg = m_model.config;
+    const uint64_t step = m_adam.state().step;
+    const uint64_t step_seed = mix64(cfg.training.seed ^ mix64(step + 1));
+    const uint32_t n_rays = st.rays_per_step;
+    const OccupancyGridView grid = m_model.occupancy.view();
+    const Mat4& w2m = m_model.world_to_model;
+    const size_t n_images = m_data.cameras.size();
+
+    // 1. Rays and their samples, marched per task of k_rays_per_task rays.
+    const size_t n_tasks = (n_rays + k_rays_per_task - 1) / k_rays_per_task;
+    std::vector<std::vector<MarchSample>> task_samples(n_tasks);
+    std::vector<TrainRay> rays(n_rays);
+    std::vector<Vec3> ray_dirs(n_rays);
+    tbb::parallel_for(size_t(0), n_tasks, [&](size_t task) {
+        std::vector<MarchSample> buf(size_t(m_march.max_samples));
+        auto& out = task_samples[task];
+        const size_t end = std::min<size_t>(n_rays, (task + 1) * k_rays_per_task);
+        for (size_t r = task * k_rays_per_task; r < end; ++r) {
+            Pcg32 rng(step_seed, r);
+            const size_t img = rng.next_u32() % n_images;
+            const Camera& cam = m_data.cameras[img];
+            const float px = rng.next_float() * float(m_data.width);
+            const float py = rng.next_float() * float(m_data.height);
+            const int ix = std::min(int(px), m_data.width - 1), iy = std::min(int(py), m_data.height - 1);
+            const uint8_t* pix = m_data.image(img) + (size_t(iy) * m_data.width + ix) * 4;
+            TrainRay& tr = rays[r];
+            tr.background = cfg.training.random_background
+                                ? Rgb(rng.next_float(), rng.next_float(), rng.next_float())
+                                : Rgb(1.0f);
+            const float alpha = pix[3] / 255.0f;
+            const Rgb rgb(pix[0] / 255.0f, pix[1] / 255.0f, pix[2] / 255.0f);
+            tr.target = rgb * alpha + tr.background * (1.0f - alpha);
+            const Ray world = generate_pixel_ray(cam, px, py);
+            const Ray model{w2m.transform_point(world.o), normalize(w2m.transform_vector(world.d))};
+            ray_dirs[r] = model.d;
+            const int n = march_ray(m_march, grid, model, rng.next_float(), buf.data());
+            tr.count = uint32_t(n);
+            out.insert(out.end(), buf.begin(), buf.begin() + n);
+        }
+    });
+
+    // 2. Keep rays, in order, while the batch has room; drop the rest (instant-ngp does the same).
+    const size_t budget = size_t(cfg.training.batch_samples);
+    size_t total_marched = 0, n_kept = 0, n_samples = 0;
+    for (uint32_t r = 0; r < n_rays; ++r) {
+        total_marched += rays[r].count;
+        if (n_kept == r && n_samples + rays[r].count <= budget) {
+            rays[r].first = uint32_t(n_samples);
+            n_samples += rays[r].count;
+            ++n_kept;
+        }
+    }
+    std::vector<Vec3> positions(n_samples), dirs(n_samples);
+    std::vector<float> dts(n_samples);
+    for (size_t task = 0, g = 0; task < n_tasks; ++task) {
+        const auto& ts = task_samples[task];
+        const size_t end = std::min<size_t>(n_kept, (task + 1) * k_rays_per_task);
+        size_t k = 0;
+        for (size_t r = task * k_rays_per_task; r < end; ++r)
+            for (uint32_t j = 0; j < rays[r].count; ++j, ++k, ++g) {
+                positions[g] = ts[k].position;
+                dirs[g] = ray_dirs[r];
+                dts[g] = ts[k].dt;
+            }
+    }
+
+    // 3. Field forward per chunk.
+    const size_t n_chunks = (n_samples + k_chunk_samples - 1) / k_chunk_samples;
+    std::vector<FieldBatch> chunks(n_chunks);
+    const float* params = st.params.data();
+    tbb::parallel_for(size_t(0), n_chunks, [&](size_t c) {
+        const size_t b = c * k_chunk_samples, n = std::min(k_chunk_samples, n_samples - b);
+        field_forward(m_layout, params, positions.data() + b, dirs.data() + b, n, true, chunks[c]);
+    });
+    std::vector<float> sigma(n_samples);
+    std::vector<Rgb> rgb(n_samples);
+    for (size_t c = 0; c < n_chunks; ++c) {
+        std::copy(chunks[c].sigma.begin(), chunks[c].sigma.end(), sigma.begin() + c * k_chunk_samples);
+        std::copy(chunks[c].rgb.begin(), chunks[c].rgb.end(), rgb.begin() + c * k_chunk_samples);
+    }
+
+    // 4. Composite, loss and its gradient per ray.
+    std::vector<float> d_sigma(n_samples, 0.0f);
+    std::vector<Rgb> d_rgb(n_samples);
+    std::vector<double> ray_loss(n_kept), ray_se(n_kept);
+    const float inv_rays = 1.0f / float(std::max<size_t>(n_kept, 1));
+    const float delta = cfg.loss.huber_delta;
+    tbb::parallel_for(size_t(0), n_kept, [&](size_t r) {
+        const TrainRay& tr = rays[r];
+        const CompositeResult fwd = composite_forward(&sigma[tr.first], &rgb[tr.first], &dts[tr.first],
+                                                      int(tr.count), cfg.march.min_transmittance,
+                                                      tr.background);
+        Rgb grad;
+        double loss = 0, se = 0;
+        for (int k = 0; k < 3; ++k) {
+            const float diff = fwd.color[k] - tr.target[k];
+            loss += huber(diff, delta, &grad[k]);
+            se += double(diff) * diff;
+        }
+        ray_loss[r] = loss;
+        ray_se[r] = se;
+        if (tr.count > 0)
+            composite_backward(&sigma[tr.first], &rgb[tr.first], &dts[tr.first], int(tr.count), fwd,
+                               tr.background, grad * inv_rays, &d_sigma[tr.first], &d_rgb[tr.first]);
+    });
+
+    // 5. Backward: MLP gradients per chunk, summed in chunk order; hash grid per level.
+    const size_t mlp_params = m_layout.grid_offset;
+    std::vector<float> chunk_grads(n_chunks * mlp_params, 0.0f);
+    tbb::parallel_for(size_t(0), n_chunks, [&](size_t c) {
+        const size_t b = c * k_chunk_samples;
+        // field_backward adds into a full-layout array; only the MLP ranges [0, grid_offset) are touched.
+        field_backward(m_layout, params, d_sigma.data() + b, d_rgb.data() + b, chunks[c],
+                       chunk_grads.data() + c * mlp_params);
+    });
+    float* grads = m_grads.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_layout.total, size_t(1) << 16),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                          std::fill(grads + range.begin(), grads + range.end(), 0.0f);
+                      });
+    for (size_t c = 0; c < n_chunks; ++c) {
+        const float* cg = chunk_grads.data() + c * mlp_params;
+        for (size_t i = 0; i < mlp_params; ++i) grads[i] += cg[i];
+    }
+    std::vector<const Vec3*> chunk_pos(n_chunks);
+    std::vector<const FieldBatch*> chunk_ptr(n_chunks);
+    for (size_t c = 0; c < n_chunks; ++c) {
+        chunk_pos[c] = positions.data() + c * k_chunk_samples;
+        chunk_ptr[c] = &chunks[c];
+    }
+    accumulate_grid_gradient(m_layout, chunk_pos, chunk_ptr, grads);
+
+    // 6. Adam, then the occupancy grid with the new parameters.
+    m_adam.step(st.params.data(), grads);
+    StepStats stats;
+    stats.step = m_adam.state().step;
+    if (step % uint64_t(cfg.occupancy.update_interval) == 0) {
+        update_occupancy(step);
+        stats.occupancy_updated = true;
+    }
+
+    // The next step's ray count aims at a full batch given this step's samples per ray.
+    const double per_ray = n_rays > 0 ? double(total_marched) / n_rays : 1.0;
+    st.rays_per_step = uint32_t(std::clamp<double>(double(budget) / std::max(per_ray, 1.0), 64.0,
+                                                   double(cfg.training.max_rays_per_batch)));
+
+    double loss = 0, se = 0;
+    for (size_t r = 0; r < n_kept; ++r) {
+        loss += ray_loss[r];
+        se += ray_se[r];
+    }
+    stats.loss = n_kept ? loss / n_kept : 0.0;
+    stats.mse = n_kept ? se / (3.0 * n_kept) : 0.0;
+    stats.rays = uint32_t(n_kept);
+    stats.samples = uint32_t(n_samples);
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    st.elapsed_seconds += stats.seconds;
+    return stats;
+}
+
+void Trainer::update_occupancy(uint64_t step) {
+    const OccupancyConfig& oc = m_model.config.occupancy;
+    Pcg32 rng(mix64(m_model.config.training.seed ^ 0x6f63637570616e63ULL), step);
+    std::vector<uint32_t> cells;
+    std::vector<Vec3> positions;
+    m_model.occupancy.plan_update(oc, int(step), rng, cells, positions);
+    std::vector<float> sigma(cells.size());
+    const size_t n_chunks = (cells.size() + k_chunk_samples - 1) / k_chunk_samples;
+    const float* params = m_model.training->params.data();
+    tbb::parallel_for(size_t(0), n_chunks, [&](size_t c) {
+        const size_t b = c * k_chunk_samples, n = std::min(k_chunk_samples, cells.size() - b);
+        FieldBatch batch;
+        field_forward(m_layout, params, positions.data() + b, nullptr, n, false, batch);
+        std::copy(batch.sigma.begin(), batch.sigma.end(), sigma.begin() + b);
+    });
+    m_model.occupancy.apply_update(oc, cells, sigma, m_march.min_step);
+}
+
+}  // namespace npt::nerf

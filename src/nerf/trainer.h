@@ -1,0 +1,54 @@
+// One training step at a time of a NerfModel on a Dataset (CPU, TBB): sample rays from random pixels of
+// random views, march them through the occupancy grid, evaluate the field in fixed-size chunks, composite
+// against a random background, Huber loss, backpropagate, Adam; refresh the occupancy grid every few steps.
+// Every random number is a function of (seed, step, ray), and every sum runs in a fixed order, so a run is
+// reproducible for a seed whatever the thread count, and continues exactly from a saved TrainingState.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "nerf/adam.h"
+#include "nerf/dataset.h"
+#include "nerf/nerf_model.h"
+
+namespace npt::nerf {
+
+struct StepStats {
+    uint64_t step = 0;        // steps completed after this one
+    double loss = 0;          // mean Huber loss per ray (summed over channels)
+    double mse = 0;           // mean squared error per channel, for a training PSNR
+    uint32_t rays = 0;        // rays in the batch
+    uint32_t samples = 0;     // samples evaluated
+    double seconds = 0;       // wall time of the step
+    bool occupancy_updated = false;
+};
+
+class Trainer {
+public:
+    // The model must have been made for this data set (create_model) or loaded with its training state.
+    // A model without a training state (e.g. loaded from a file saved without it) starts one from its
+    // parameters. Throws npt::Error when the data set is empty.
+    Trainer(NerfModel& model, const Dataset& data);
+
+    StepStats step();
+    uint64_t steps_done() const { return m_adam.state().step; }
+
+    // Copies the optimizer state and the averaged parameters into the model, ready to save.
+    void sync_model();
+
+private:
+    void update_occupancy(uint64_t step);
+
+    NerfModel& m_model;
+    const Dataset& m_data;
+    NerfLayout m_layout;
+    MarchParams m_march;
+    Adam m_adam;
+    std::vector<float> m_grads;
+};
+
+// Training PSNR from a mean squared error over [0,1] values.
+inline double psnr_from_mse(double mse) { return mse > 0 ? -10.0 * std::log10(mse) : 99.0; }
+
+}  // namespace npt::nerf
