@@ -349,12 +349,14 @@ RawModel read_sections(Reader& in) {
             raw.density.emplace(size_t((length - 8) / 4));
             in.read(raw.density->data(), raw.density->size() * 4);
         } else if (tag == "TRAN") {
-            if (length < 24 || (length - 24) % 16 != 0) throw corrupt();
+            if (length < 32 || (length - 32) % 16 != 0) throw corrupt();
             TrainingState& t = raw.training.emplace();
             raw.training_step = in.get<uint64_t>();
             t.elapsed_seconds = in.get<double>();
+            t.rays_per_step = in.get<uint32_t>();
+            (void)in.get<uint32_t>();  // reserved
             raw.training_count = in.get<uint64_t>();
-            const size_t n = size_t((length - 24) / 16);
+            const size_t n = size_t((length - 32) / 16);
             for (std::vector<float>* v : {&t.params, &t.adam.m, &t.adam.v, &t.adam.ema}) {
                 v->resize(n);
                 in.read(v->data(), n * 4);
@@ -428,9 +430,11 @@ void save_model(const fs::path& path, const NerfModel& model, bool with_training
     out.put(uint32_t(model.occupancy.resolution()));
     out.write(density.data(), 4 * density.size());
     if (training) {
-        out.section("TRAN", 24 + 16 * uint64_t(total));
+        out.section("TRAN", 32 + 16 * uint64_t(total));
         out.put(uint64_t(training->adam.step));
         out.put(training->elapsed_seconds);
+        out.put(uint32_t(training->rays_per_step));
+        out.put(uint32_t(0));  // reserved
         out.put(uint64_t(total));
         for (const auto* v : {&training->params, &training->adam.m, &training->adam.v, &training->adam.ema})
             out.write(v->data(), 4 * total);

@@ -240,7 +240,7 @@ TEST(ModelFile, NanUnderAValidChecksum) {
     for (const Case& c :
          {Case{payload_of(full, "PARM") + 8 + 7 * 4, nan, "parameter 7 is NaN or Inf"},
           Case{payload_of(full, "OCCG") + 8 + 11 * 4, inf, "occupancy density 11 is NaN or Inf"},
-          Case{payload_of(full, "TRAN") + 24 + (2 * n + 3) * 4, nan, "state v 3 is NaN or Inf"}}) {
+          Case{payload_of(full, "TRAN") + 32 + (2 * n + 3) * 4, nan, "state v 3 is NaN or Inf"}}) {
         SCOPED_TRACE(c.message);
         std::string b = full;
         std::memcpy(b.data() + c.offset, &c.value, 4);
