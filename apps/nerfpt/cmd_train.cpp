@@ -162,10 +162,19 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     const uint64_t interval = uint64_t(model.config.training.checkpoint_interval);
     double rays_ema = 0;
     nerf::StepStats stats;
+    nerf::StepStats::Phases phase_total;
     bool interrupted = false;
     while (trainer.steps_done() < target_steps &&
            (args.seconds <= 0 || model.training->elapsed_seconds < args.seconds)) {
         stats = trainer.step();
+        const auto& p = stats.phases;
+        phase_total.march += p.march;
+        phase_total.forward += p.forward;
+        phase_total.loss += p.loss;
+        phase_total.backward += p.backward;
+        phase_total.grid_backward += p.grid_backward;
+        phase_total.adam += p.adam;
+        phase_total.occupancy += p.occupancy;
         const double rate = stats.seconds > 0 ? stats.rays / stats.seconds : 0.0;
         rays_ema = rays_ema == 0 ? rate : 0.9 * rays_ema + 0.1 * rate;
         const double elapsed = model.training->elapsed_seconds;
@@ -185,6 +194,10 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     }
     progress.update(stats, 1.0, rays_ema, model.training->elapsed_seconds, true);
     progress.finish();
+    const auto& pt = phase_total;
+    spdlog::debug("time per phase: march {:.1f} s, field forward {:.1f} s, loss {:.1f} s, MLP backward {:.1f} s, "
+                  "hash-grid backward {:.1f} s, Adam {:.1f} s, occupancy grid {:.1f} s",
+                  pt.march, pt.forward, pt.loss, pt.backward, pt.grid_backward, pt.adam, pt.occupancy);
     save();
     interrupts.set_cooperative(false);
     fmt::print("wrote {} after {} steps ({} of training), last batch psnr {:.2f} dB\n", out.string(),

@@ -16,7 +16,9 @@ void field_forward(const NerfLayout& layout, const float* params, const Vec3* po
     b.color_in.resize(n * col_in);
     b.sigma.resize(n);
     const float* grid = params + layout.grid_offset;
-    for (size_t i = 0; i < n; ++i) hash_encode(layout.grid, grid, positions[i], &b.encoded[i * enc_dims]);
+    const HashLevels levels = hash_levels(layout.grid);
+    for (size_t i = 0; i < n; ++i)
+        hash_encode(layout.grid, levels, grid, positions[i], &b.encoded[i * enc_dims]);
 
     // The density MLP writes its output straight into the first columns of the colour MLP's input.
     b.density_out.resize(n * dens_out);
@@ -74,13 +76,15 @@ void accumulate_grid_gradient(const NerfLayout& layout, const std::vector<const 
     const HashGridConfig& cfg = layout.grid;
     const int nf = cfg.features_per_level, enc_dims = cfg.output_dims();
     float* d_grid = d_params + layout.grid_offset;
+    const HashLevels levels = hash_levels(cfg);
     tbb::parallel_for(0, cfg.levels, [&](int level) {
+        const HashLevel lv = levels.level[level];
         for (size_t c = 0; c < chunks.size(); ++c) {
             const FieldBatch& b = *chunks[c];
             for (size_t i = 0; i < b.n; ++i) {
                 const float* d_out = &b.d_encoded[i * enc_dims + level * nf];
                 HashCorner corners[8];
-                hash_level_corners(cfg, level, positions[c][i], corners);
+                hash_level_corners(cfg, lv, level, positions[c][i], corners);
                 for (int k = 0; k < 8; ++k) {
                     float* g = d_grid + size_t(corners[k].index) * nf;
                     for (int f = 0; f < nf; ++f) g[f] += corners[k].weight * d_out[f];

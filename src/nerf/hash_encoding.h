@@ -70,14 +70,28 @@ NPT_HD NPT_INLINE uint32_t hash_grid_index(const HashGridConfig& cfg, const Hash
     return ((x * 1u) ^ (y * 2654435761u) ^ (z * 805459861u)) & mask;
 }
 
-// The 8 corners of p's cell at `level`, in the order bit 0 = x, bit 1 = y, bit 2 = z of the corner offset.
-NPT_HD NPT_INLINE void hash_level_corners(const HashGridConfig& cfg, int level, Vec3 p, HashCorner out[8]) {
-    const HashLevel lv = hash_level(cfg, level);
+constexpr int k_max_hash_levels = 32;
+
+// Every level's HashLevel, computed once per batch instead of once per sample (exp2f/log2f per level add up).
+struct HashLevels {
+    HashLevel level[k_max_hash_levels];
+};
+NPT_HD NPT_INLINE HashLevels hash_levels(const HashGridConfig& cfg) {
+    HashLevels h;
+    for (int l = 0; l < cfg.levels && l < k_max_hash_levels; ++l) h.level[l] = hash_level(cfg, l);
+    return h;
+}
+
+// The 8 corners of p's cell at `level` (whose HashLevel is lv), in the order bit 0 = x, bit 1 = y, bit 2 = z
+// of the corner offset.
+NPT_HD NPT_INLINE void hash_level_corners(const HashGridConfig& cfg, const HashLevel& lv, int level, Vec3 p,
+                                          HashCorner out[8]) {
     uint32_t base[3];
     float frac[3];
     for (int a = 0; a < 3; ++a) {
         // Clamping keeps every corner inside the level for any input; the position gradient is not needed.
-        const float pa = fminf(fmaxf(p[a], 0.0f), 1.0f);
+        // Comparisons rather than fminf/fmaxf, which are library calls without -ffinite-math-only; NaN -> 0.
+        const float pa = !(p[a] > 0.0f) ? 0.0f : (p[a] < 1.0f ? p[a] : 1.0f);
         const float pos = pa * lv.scale + 0.5f;
         const float fl = floorf(pos);
         base[a] = uint32_t(fl);
@@ -94,6 +108,25 @@ NPT_HD NPT_INLINE void hash_level_corners(const HashGridConfig& cfg, int level, 
         }
         out[c].index = level_offset + hash_grid_index(cfg, lv, g[0], g[1], g[2]);
         out[c].weight = w;
+    }
+}
+
+NPT_HD NPT_INLINE void hash_level_corners(const HashGridConfig& cfg, int level, Vec3 p, HashCorner out[8]) {
+    hash_level_corners(cfg, hash_level(cfg, level), level, p, out);
+}
+
+// hash_encode with the levels precomputed: the batched CPU path.
+NPT_HD NPT_INLINE void hash_encode(const HashGridConfig& cfg, const HashLevels& levels, const float* params,
+                                   Vec3 p, float* out) {
+    const int nf = cfg.features_per_level;
+    for (int l = 0; l < cfg.levels; ++l) {
+        HashCorner corners[8];
+        hash_level_corners(cfg, levels.level[l], l, p, corners);
+        for (int f = 0; f < nf; ++f) {
+            float acc = 0.0f;
+            for (int c = 0; c < 8; ++c) acc += corners[c].weight * params[size_t(corners[c].index) * nf + f];
+            out[l * nf + f] = acc;
+        }
     }
 }
 

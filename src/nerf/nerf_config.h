@@ -34,6 +34,8 @@ struct OccupancyConfig {
     float decay = 0.95f;          // every update multiplies the stored density by this before taking the max
     float threshold = 0.01f;      // a cell is occupied when its optical thickness over the minimum step exceeds
                                   // min(threshold, mean over the grid)
+    // Both count instant-ngp steps of 2^18 samples: with training.batch_samples = 2^16 an update comes every
+    // 16 * 4 = 64 of our steps, so the grid costs the same share of the work as in instant-ngp.
     int update_interval = 16;     // steps between updates
     int warmup_steps = 256;       // updates before this step sample every cell; later ones a quarter of them
 };

@@ -18,6 +18,7 @@ namespace {
 constexpr size_t k_chunk_samples = 2048;  // field evaluation unit: fixed, so results ignore the thread count
 constexpr size_t k_rays_per_task = 256;
 constexpr uint32_t k_initial_rays = 1024;
+constexpr int k_ngp_batch_samples = 1 << 18;
 
 struct TrainRay {
     uint32_t first = 0, count = 0;  // samples [first, first + count) of the batch
@@ -54,6 +55,12 @@ Trainer::Trainer(NerfModel& model, const Dataset& data)
     if (st.adam.step > 0 || !st.adam.m.empty()) m_adam.set_state(st.adam);
     if (st.rays_per_step == 0) st.rays_per_step = k_initial_rays;
     m_grads.resize(m_layout.total);
+    // The grid's schedule counts instant-ngp steps of 2^18 samples: a smaller batch stretches it, so the grid
+    // costs the same share of the training work (with 2^16 samples and every-16-steps updates, the grid
+    // estimate would otherwise cost as much as training itself on a CPU).
+    const double stretch = double(k_ngp_batch_samples) / double(model.config.training.batch_samples);
+    m_occupancy_interval =
+        uint64_t(std::max(1.0, std::round(double(model.config.occupancy.update_interval) * stretch)));
 }
 
 void Trainer::sync_model() {
@@ -65,6 +72,13 @@ void Trainer::sync_model() {
 
 StepStats Trainer::step() {
     const auto t0 = std::chrono::steady_clock::now();
+    auto lap = [last = t0]() mutable {
+        const auto now = std::chrono::steady_clock::now();
+        const double s = std::chrono::duration<double>(now - last).count();
+        last = now;
+        return s;
+    };
+    StepStats stats;
     TrainingState& st = *m_model.training;
     const NerfConfig& cfg = m_model.config;
     const uint64_t step = m_adam.state().step;
@@ -132,6 +146,8 @@ StepStats Trainer::step() {
             }
     }
 
+    stats.phases.march = lap();
+
     // 3. Field forward per chunk.
     const size_t n_chunks = (n_samples + k_chunk_samples - 1) / k_chunk_samples;
     std::vector<FieldBatch> chunks(n_chunks);
@@ -146,6 +162,8 @@ StepStats Trainer::step() {
         std::copy(chunks[c].sigma.begin(), chunks[c].sigma.end(), sigma.begin() + c * k_chunk_samples);
         std::copy(chunks[c].rgb.begin(), chunks[c].rgb.end(), rgb.begin() + c * k_chunk_samples);
     }
+
+    stats.phases.forward = lap();
 
     // 4. Composite, loss and its gradient per ray.
     std::vector<float> d_sigma(n_samples, 0.0f);
@@ -172,6 +190,8 @@ StepStats Trainer::step() {
                                tr.background, grad * inv_rays, &d_sigma[tr.first], &d_rgb[tr.first]);
     });
 
+    stats.phases.loss = lap();
+
     // 5. Backward: MLP gradients per chunk, summed in chunk order; hash grid per level.
     const size_t mlp_params = m_layout.grid_offset;
     std::vector<float> chunk_grads(n_chunks * mlp_params, 0.0f);
@@ -196,16 +216,19 @@ StepStats Trainer::step() {
         chunk_pos[c] = positions.data() + c * k_chunk_samples;
         chunk_ptr[c] = &chunks[c];
     }
+    stats.phases.backward = lap();
     accumulate_grid_gradient(m_layout, chunk_pos, chunk_ptr, grads);
+    stats.phases.grid_backward = lap();
 
     // 6. Adam, then the occupancy grid with the new parameters.
     m_adam.step(st.params.data(), grads);
-    StepStats stats;
+    stats.phases.adam = lap();
     stats.step = m_adam.state().step;
-    if (step % uint64_t(cfg.occupancy.update_interval) == 0) {
+    if (step % m_occupancy_interval == 0) {
         update_occupancy(step);
         stats.occupancy_updated = true;
     }
+    stats.phases.occupancy = lap();
 
     // The next step's ray count aims at a full batch given this step's samples per ray.
     const double per_ray = n_rays > 0 ? double(total_marched) / n_rays : 1.0;
@@ -231,7 +254,7 @@ void Trainer::update_occupancy(uint64_t step) {
     Pcg32 rng(mix64(m_model.config.training.seed ^ 0x6f63637570616e63ULL), step);
     std::vector<uint32_t> cells;
     std::vector<Vec3> positions;
-    m_model.occupancy.plan_update(oc, int(step / uint64_t(oc.update_interval)), rng, cells, positions);
+    m_model.occupancy.plan_update(oc, int(step / m_occupancy_interval), rng, cells, positions);
     std::vector<float> sigma(cells.size());
     const size_t n_chunks = (cells.size() + k_chunk_samples - 1) / k_chunk_samples;
     const float* params = m_model.training->params.data();

@@ -22,6 +22,10 @@ struct StepStats {
     uint32_t samples = 0;     // samples evaluated
     double seconds = 0;       // wall time of the step
     bool occupancy_updated = false;
+    // Where the step's time went, for profiles and benchmarks.
+    struct Phases {
+        double march = 0, forward = 0, loss = 0, backward = 0, grid_backward = 0, adam = 0, occupancy = 0;
+    } phases;
 };
 
 class Trainer {
@@ -46,6 +50,7 @@ private:
     MarchParams m_march;
     Adam m_adam;
     std::vector<float> m_grads;
+    uint64_t m_occupancy_interval = 16;  // steps between occupancy updates
 };
 
 // Training PSNR from a mean squared error over [0,1] values.
