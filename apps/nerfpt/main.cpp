@@ -11,6 +11,7 @@
 #include "cmd_compare.h"
 #include "cmd_info.h"
 #include "cmd_render.h"
+#include "cmd_train.h"
 #include "common.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -29,7 +30,7 @@ int main(int argc, char** argv) {
     using namespace npt::cli;
     InterruptGuard interrupts;  // first: every thread started later inherits the blocked signals
 
-    CLI::App app("nerfpt: a path tracer for glTF scenes that will render NeRFs inside them.", "nerfpt");
+    CLI::App app("nerfpt: train NeRFs from posed photos and path-trace glTF scenes.", "nerfpt");
     app.footer("Run 'nerfpt SUBCOMMAND --help' for the options of each subcommand.");
     app.set_version_flag("--version", std::string("nerfpt ") + k_version, "Print the version and exit");
     app.require_subcommand(1, 1);
@@ -44,6 +45,8 @@ int main(int argc, char** argv) {
     CLI::App* info_cmd = add_info_command(app, info_args);
     CompareArgs compare_args;
     CLI::App* compare_cmd = add_compare_command(app, compare_args);
+    TrainArgs train_args;
+    CLI::App* train_cmd = add_train_command(app, train_args);
 
     try {
         app.parse(argc, argv);
@@ -63,6 +66,7 @@ int main(int argc, char** argv) {
         if (render_cmd->parsed()) return run_render(render_args, global, interrupts);
         if (info_cmd->parsed()) return run_info(info_args, global);
         if (compare_cmd->parsed()) return run_compare(compare_args, global);
+        if (train_cmd->parsed()) return run_train(train_args, global, interrupts);
     } catch (const npt::Error& e) {
         print_error(e.what());
         return k_exit_error;

@@ -280,6 +280,46 @@ Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, c
     return ds;
 }
 
+void downscale_dataset(Dataset& ds, int factor) {
+    if (factor == 1) return;
+    if (factor < 1 || factor > ds.width || factor > ds.height)
+        throw Error("downscale factor " + std::to_string(factor) + " must be in 1.." +
+                    std::to_string(std::min(ds.width, ds.height)) + " for " + std::to_string(ds.width) +
+                    "x" + std::to_string(ds.height) + " images");
+    const int w = ds.width / factor, h = ds.height / factor;
+    const size_t n = ds.cameras.size();
+    std::vector<uint8_t> out(n * size_t(w) * h * 4);
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        const uint8_t* src = ds.image(i);
+        uint8_t* dst = out.data() + i * size_t(w) * h * 4;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                double acc[4] = {0, 0, 0, 0};
+                for (int dy = 0; dy < factor; ++dy)
+                    for (int dx = 0; dx < factor; ++dx) {
+                        const uint8_t* p = src + (size_t(y * factor + dy) * ds.width + x * factor + dx) * 4;
+                        const double a = p[3];
+                        for (int c = 0; c < 3; ++c) acc[c] += p[c] * a;
+                        acc[3] += a;
+                    }
+                uint8_t* q = dst + (size_t(y) * w + x) * 4;
+                for (int c = 0; c < 3; ++c) q[c] = acc[3] > 0 ? uint8_t(std::lround(acc[c] / acc[3])) : 0;
+                q[3] = uint8_t(std::lround(acc[3] / (factor * factor)));
+            }
+    });
+    ds.rgba = std::move(out);
+    ds.width = w;
+    ds.height = h;
+    for (Camera& c : ds.cameras) {
+        c.fx /= float(factor);
+        c.fy /= float(factor);
+        c.cx /= float(factor);
+        c.cy /= float(factor);
+        c.width = w;
+        c.height = h;
+    }
+}
+
 Ray generate_pixel_ray(const Camera& camera, float px, float py) {
     const Vec3 d_cam((px - camera.cx) / camera.fx, -(py - camera.cy) / camera.fy, -1.0f);
     const Vec3 d = camera.camera_to_world.transform_vector(d_cam);

@@ -58,6 +58,11 @@ constexpr size_t k_max_dataset_bytes = size_t(32) << 30;
 Dataset load_dataset(const std::filesystem::path& folder_or_json, const std::string& split,
                      const ProgressFn& progress = {});
 
+// Shrinks every image by an integer factor (box filter over premultiplied colour, so transparent pixels do not
+// bleed their colour into the edges) and scales the intrinsics to match. Sizes that are not multiples of the
+// factor lose their last rows/columns. Throws npt::Error when factor < 1 or larger than the image.
+void downscale_dataset(Dataset& ds, int factor);
+
 // The world-space ray through image coordinates (px, py): pixel centres are at +0.5, y runs down the image.
 // The direction is normalised; the origin is the camera position.
 Ray generate_pixel_ray(const Camera& camera, float px, float py);

@@ -1,0 +1,201 @@
+#include "cmd_train.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+#include "core/error.h"
+#include "core/progress.h"
+#include "interrupt.h"
+#include "nerf/dataset.h"
+#include "nerf/model_file.h"
+#include "nerf/trainer.h"
+
+namespace npt::cli {
+namespace fs = std::filesystem;
+
+namespace {
+constexpr uint64_t k_default_steps = 3000;
+}
+
+CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
+    CLI::App* cmd = app.add_subcommand("train", "Train a NeRF from posed images (transforms.json) on the CPU");
+    cmd->footer(
+        "The model follows instant-ngp's NeRF: a 16-level hash grid (2^19 entries per level, 2 features,\n"
+        "base resolution 16, finest 2048 x aabb_scale), a 1x64 density MLP with 16 outputs, SH degree 4 of\n"
+        "the view direction, a 2x64 colour MLP; occupancy grid 128^3 per cascade; Adam lr 1e-2; all\n"
+        "changeable with --config (docs/formats.md lists every field).\n"
+        "--steps and --time count the whole training, across resumes. Without either, 3000 steps.\n"
+        "A checkpoint is written every training.checkpoint_interval steps and on Ctrl-C (a second\n"
+        "Ctrl-C quits at once); --resume continues from it exactly.\n"
+        "Example: nerfpt train ../shared/data/nerf_synthetic/lego -o lego.npt --downscale 2 --time 600");
+    cmd->add_option("DATA", args.data,
+                    "A transforms.json, or a folder holding transforms.json or transforms_{SPLIT}.json")
+        ->required();
+    cmd->add_option("-o,--output", args.output, "Model file to write (.npt); its folder must exist")
+        ->required();
+    cmd->add_option("--split", args.split,
+                    "Which transforms_{SPLIT}.json to read when DATA is a folder without transforms.json "
+                    "(default: train)");
+    cmd->add_option("--steps", args.steps, "Train until this many steps in total (default: 3000)")
+        ->check(CLI::Range(uint64_t(1), uint64_t(100000000)));
+    cmd->add_option("--time", args.seconds, "Train until this many seconds in total, then stop and save")
+        ->check(CLI::Range(0.001, 1e7));
+    cmd->add_option("--config", args.config, "JSON file with model and training settings (docs/formats.md)");
+    cmd->add_option("--downscale", args.downscale,
+                    "Shrink the images by this integer factor before training, e.g. 2 for 400 -> 200 px "
+                    "(default: 1)")
+        ->check(CLI::Range(1, 64));
+    cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads (default: 0)")
+        ->check(CLI::Range(0, 4096));
+    cmd->add_option("--checkpoint-every", args.checkpoint_every,
+                    "Steps between checkpoints (default: the config's, 500)")
+        ->check(CLI::Range(1, 100000000));
+    cmd->add_flag("--resume", args.resume, "Continue training the model in --output where it stopped");
+    cmd->add_flag("--force", args.force, "Overwrite --output if it exists (without --resume)")
+        ->excludes(cmd->get_option("--resume"));
+    return cmd;
+}
+
+namespace {
+
+void check_output(const fs::path& out, bool resume, bool force) {
+    const fs::path dir = out.parent_path().empty() ? fs::path(".") : out.parent_path();
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec))
+        throw Error("--output '" + out.string() + "': folder '" + dir.string() + "' does not exist");
+    if (access(dir.c_str(), W_OK) != 0)
+        throw Error("--output '" + out.string() + "': folder '" + dir.string() + "' is not writable");
+    if (fs::is_directory(out, ec)) throw Error("--output '" + out.string() + "': is a folder");
+    if (resume && !fs::exists(out, ec))
+        throw Error("--resume: '" + out.string() + "' does not exist (train without --resume first)");
+    if (!resume && !force && fs::exists(out, ec))
+        throw Error("--output '" + out.string() +
+                    "' exists: pass --resume to continue training it or --force to start over");
+}
+
+// One status line: a bar over steps (or time) on a terminal, a plain line every few seconds otherwise.
+class TrainProgress {
+  public:
+    TrainProgress(bool tty, bool quiet) : m_tty(tty), m_quiet(quiet) {}
+    void update(const nerf::StepStats& s, double fraction, double rays_per_s, double elapsed, bool force) {
+        if (m_quiet) return;
+        const double now = Progress::steady_seconds();
+        if (!force && now < m_next) return;
+        m_next = now + (m_tty ? 0.2 : 5.0);
+        const std::string text = fmt::format(
+            "train {} {:3.0f}% step {} loss {:.5f} psnr {:.2f} dB {} rays/s {} samples/step {}",
+            format_bar(fraction, 20), 100.0 * fraction, s.step, s.loss, nerf::psnr_from_mse(s.mse),
+            format_count(rays_per_s), format_count(double(s.samples)), format_eta_clock(elapsed));
+        if (m_tty) {
+            fmt::print(stderr, "\r{}\x1b[K", text);
+            m_open = true;
+        } else {
+            fmt::print(stderr, "{}\n", text);
+        }
+    }
+    void finish() {
+        if (m_open) fmt::print(stderr, "\n");
+        m_open = false;
+    }
+
+  private:
+    bool m_tty, m_quiet;
+    bool m_open = false;
+    double m_next = 0;
+};
+
+}  // namespace
+
+int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    const fs::path out = args.output;
+    check_output(out, args.resume, args.force);
+    std::optional<tbb::global_control> threads;
+    if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
+
+    nerf::NerfModel model;
+    if (args.resume) {
+        if (!args.config.empty())
+            throw Error("--config: a resumed model keeps the config it was trained with (stored in '" +
+                        out.string() + "')");
+        model = nerf::load_model(out);
+        if (!model.training)
+            throw Error("--resume: '" + out.string() + "' was saved without its training state");
+    }
+    const bool tty = stream_is_tty(stderr);
+    nerf::Dataset data;
+    {
+        ProgressSettings ps;
+        ps.label = "load";
+        ps.unit = "images";
+        ps.style = progress_style(tty, global.quiet);
+        Progress progress(ps, std::cerr);
+        data = nerf::load_dataset(args.data, args.split,
+                                  [&](size_t done, size_t total) { progress.update(done, total); });
+        progress.finish();
+    }
+    nerf::downscale_dataset(data, args.downscale);
+    if (!args.resume) {
+        const nerf::NerfConfig config = args.config.empty() ? nerf::NerfConfig{} : nerf::load_config(args.config);
+        model = nerf::create_model(config, data.aabb_scale, nerf::ngp_world_to_model(data.scale, data.offset));
+    }
+    if (args.checkpoint_every > 0) model.config.training.checkpoint_interval = args.checkpoint_every;
+    const uint64_t target_steps = args.steps ? args.steps : (args.seconds > 0 ? UINT64_MAX : k_default_steps);
+    spdlog::info("training on {} frames of {}x{}, aabb_scale {}, {} parameters{}", data.cameras.size(),
+                 data.width, data.height, data.aabb_scale, model.params.size(),
+                 args.resume ? fmt::format(", resuming at step {}", model.training->adam.step) : "");
+
+    nerf::Trainer trainer(model, data);
+    auto save = [&] {
+        trainer.sync_model();
+        auto no_interrupt = interrupts.hold();  // the file is complete, or an interrupt waits for it
+        nerf::save_model(out, model, true);
+    };
+    interrupts.set_cooperative(true);
+    TrainProgress progress(tty, global.quiet);
+    const uint64_t interval = uint64_t(model.config.training.checkpoint_interval);
+    double rays_ema = 0;
+    nerf::StepStats stats;
+    bool interrupted = false;
+    while (trainer.steps_done() < target_steps &&
+           (args.seconds <= 0 || model.training->elapsed_seconds < args.seconds)) {
+        stats = trainer.step();
+        const double rate = stats.seconds > 0 ? stats.rays / stats.seconds : 0.0;
+        rays_ema = rays_ema == 0 ? rate : 0.9 * rays_ema + 0.1 * rate;
+        const double elapsed = model.training->elapsed_seconds;
+        const double fraction =
+            args.seconds > 0 && !args.steps
+                ? std::min(1.0, elapsed / args.seconds)
+                : std::min(1.0, double(trainer.steps_done()) / double(target_steps));
+        progress.update(stats, fraction, rays_ema, elapsed, false);
+        if (!std::isfinite(stats.loss))
+            throw Error("training diverged at step " + std::to_string(stats.step) +
+                        " (loss is not finite); the last checkpoint in '" + out.string() + "' is kept");
+        if (interrupts.stop_requested()) {
+            interrupted = true;
+            break;
+        }
+        if (trainer.steps_done() % interval == 0) save();
+    }
+    progress.update(stats, 1.0, rays_ema, model.training->elapsed_seconds, true);
+    progress.finish();
+    save();
+    interrupts.set_cooperative(false);
+    fmt::print("wrote {} after {} steps ({} of training), last batch psnr {:.2f} dB\n", out.string(),
+               trainer.steps_done(), format_seconds(model.training->elapsed_seconds),
+               nerf::psnr_from_mse(stats.mse));
+    if (interrupted) {
+        fmt::print(stderr, "nerfpt: interrupted; continue with: nerfpt train {} -o {} --resume\n", args.data,
+                   args.output);
+        return 128 + interrupts.stop_signal();
+    }
+    return 0;
+}
+
+}  // namespace npt::cli
