@@ -4,6 +4,7 @@
 // dot(W[o], x).
 #pragma once
 
+#include <cmath>  // fmaxf
 #include <cstddef>
 
 #include "core/platform.h"

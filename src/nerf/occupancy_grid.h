@@ -28,7 +28,7 @@ public:
     // Cells to re-estimate at training step `update_index` (the how-many'th update): all cells while
     // update_index * interval < warmup_steps, else a random quarter, plus as many random occupied cells (as
     // instant-ngp). For each, a uniformly random position inside the cell, in model space.
-    void plan_update(const OccupancyConfig& cfg, int step, Pcg32& rng, std::vector<uint32_t>& cells,
+    void plan_update(const OccupancyConfig& cfg, int update_index, Pcg32& rng, std::vector<uint32_t>& cells,
                      std::vector<Vec3>& positions) const;
     // density[cell] = max(density[cell] * decay, sigma * min_step) for planned cells, decay only for the
     // others; then occupied = density > min(threshold, mean density). sigma[i] belongs to cells[i].

@@ -22,6 +22,7 @@ struct OccupancyGridView {
     // The smallest cascade that contains p (clamped to the last one).
     NPT_HD NPT_INLINE int cascade_of(Vec3 p) const {
         const float m = fmaxf(fabsf(p.x - 0.5f), fmaxf(fabsf(p.y - 0.5f), fabsf(p.z - 0.5f)));
+        if (!(m > 0.0f)) return 0;  // frexpf(0) gives exponent 0, which would say cascade 1 at the centre
         int exponent = 0;
         frexpf(m, &exponent);  // m in [2^(e-1), 2^e)
         const int c = exponent + 1;

@@ -30,14 +30,120 @@ NPT_HD NPT_INLINE float march_step(const MarchParams& mp, float t) {
     return clampf(t * mp.cone_angle, mp.min_step, mp.max_step);
 }
 
-// Entry and exit distances of the ray in the aabb, clipped to t >= 0; false when it misses.
-NPT_HD inline bool march_bounds(const MarchParams& mp, const Ray& ray, float* t_near, float* t_far);
+// Entry and exit distances of the ray in the aabb, clipped to t >= 0; false when it misses (also for
+// non-finite input, and for a zero direction, whose exit would be infinite).
+NPT_HD inline bool march_bounds(const MarchParams& mp, const Ray& ray, float* t_near, float* t_far) {
+    float lo = 0.0f;
+    float hi = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+        const float o = ray.o[a];
+        const float d = ray.d[a];
+        const float bmin = mp.aabb_min[a];
+        const float bmax = mp.aabb_max[a];
+        if (!isfinite(o) || !isfinite(d) || !isfinite(bmin) || !isfinite(bmax)) return false;
+        if (d == 0.0f) {
+            // Parallel to this slab: 0 * inf would be NaN, so decide by the origin alone.
+            if (o < bmin || o > bmax) return false;
+            continue;
+        }
+        const float inv = 1.0f / d;
+        const float t0 = (bmin - o) * inv;
+        const float t1 = (bmax - o) * inv;
+        lo = fmaxf(lo, fminf(t0, t1));
+        hi = fminf(hi, fmaxf(t0, t1));
+    }
+    if (!(lo <= hi) || !isfinite(hi)) return false;
+    *t_near = lo;
+    *t_far = hi;
+    return true;
+}
+
+// The cascade whose occupancy a step of dt at p tests (instant-ngp's mip_from_dt): the finest one whose cells
+// are at least dt long, so that a step cannot jump over a whole cell it did not test, or the cascade of the
+// position if that is coarser.
+NPT_HD NPT_INLINE int march_cascade(const OccupancyGridView& grid, Vec3 p, float dt) {
+    int exponent = 0;
+    // dt * R = m 2^e with m in [0.5, 1): the cell size 2^c / R reaches dt at c = e, or at e - 1 when dt * R
+    // is exactly 2^(e-1).
+    const float mantissa = frexpf(dt * float(grid.resolution), &exponent);
+    if (mantissa == 0.5f) --exponent;
+    const int from_dt = exponent < 0 ? 0 : (exponent > grid.cascades - 1 ? grid.cascades - 1 : exponent);
+    const int from_pos = grid.cascade_of(p);
+    return from_dt > from_pos ? from_dt : from_pos;
+}
+
+// Distance along the ray from p to the exit of p's cell in cascade c (instant-ngp's distance_to_next_voxel).
+// Axes the ray is parallel to never exit; a point exactly on a boundary that the ray leaves through gives 0.
+NPT_HD NPT_INLINE float march_distance_to_cell_exit(const OccupancyGridView& grid, Vec3 p, Vec3 d, int c) {
+    const float cell = grid.cascade_size(c) / float(grid.resolution);
+    float t = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] == 0.0f) continue;
+        // Cell boundaries are the integers of u: the cascade is centred at 0.5 and R is even.
+        const float u = (p[a] - 0.5f) / cell;
+        const float boundary = d[a] > 0.0f ? floorf(u) + 1.0f : floorf(u);
+        t = fminf(t, (boundary - u) * cell / d[a]);
+    }
+    return fmaxf(t, 0.0f);
+}
+
+// The first point of the step lattice (t, t + dt(t), ...) at or past t_target, at least one step on so that a
+// zero distance still makes progress. Where the step is the same all the way to t_target (no cone angle, or
+// both ends clamped) the lattice is jumped in one go; otherwise it is walked, with a cap that only float
+// stagnation could reach.
+NPT_HD NPT_INLINE float march_advance(const MarchParams& mp, float t, float t_target) {
+    constexpr int k_max_walk = 4096;
+    for (int i = 0; i < k_max_walk; ++i) {
+        const float dt = march_step(mp, t);
+        if (march_step(mp, t_target) == dt) return t + fmaxf(1.0f, ceilf((t_target - t) / dt)) * dt;
+        t += dt;
+        if (t >= t_target) return t;
+    }
+    return fmaxf(t, t_target);
+}
 
 // Writes up to mp.max_samples samples of `ray` (unit direction, model space) into out and returns how many.
 // jitter in [0,1) offsets the first sample by jitter * step so that training sees every depth. Samples lie in
-// occupied cells only; their dt is the step taken at them.
-NPT_HD inline int march_ray(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray, float jitter,
-                     MarchSample* out);
+// occupied cells only; their dt is the step taken at them. A view with no occupancy array (occupied ==
+// nullptr) counts every cell as occupied. Non-finite input, non-positive steps or a ray that misses give 0.
+NPT_HD inline int march_ray(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
+                            float jitter, MarchSample* out) {
+    if (mp.max_samples <= 0 || !isfinite(jitter) || !isfinite(mp.cone_angle)) return 0;
+    if (!(mp.min_step > 0.0f) || !(mp.max_step > 0.0f) || !isfinite(mp.min_step) || !isfinite(mp.max_step))
+        return 0;
+    if (grid.cascades < 1 || grid.resolution < 1) return 0;
+    float t_near = 0.0f;
+    float t_far = 0.0f;
+    if (!march_bounds(mp, ray, &t_near, &t_far)) return 0;
+
+    // Every pass either emits a sample or leaves a cell; a straight line leaves at most 3 (R + 1) cells of
+    // each cascade, so this bound is never reached in exact arithmetic: it stops a ray whose t is so large
+    // that steps no longer change it.
+    const int max_skips = 3 * (grid.resolution + 2) * grid.cascades + 64;
+    int skips = 0;
+    int count = 0;
+    float t = t_near + jitter * march_step(mp, t_near);
+    while (t < t_far && count < mp.max_samples) {
+        const Vec3 p = ray.at(t);
+        const float dt = march_step(mp, t);
+        const int c = march_cascade(grid, p, dt);
+        if (grid.occupied == nullptr || grid.is_occupied(p, c)) {
+            out[count++] = MarchSample{p, t, dt};
+            const float next = t + dt;
+            if (!(next > t)) break;
+            t = next;
+        } else {
+            if (++skips > max_skips) break;
+            // The epsilon (a millionth of a cell, or of t where t is larger) moves the target off the
+            // boundary itself, so that rounding of o + t d cannot leave the next position in this cell.
+            const float cell = grid.cascade_size(c) / float(grid.resolution);
+            const float eps = fmaxf(1e-6f * cell, 1e-6f * t);
+            const float next = march_advance(mp, t, t + march_distance_to_cell_exit(grid, p, ray.d, c) + eps);
+            if (!(next > t)) break;
+            t = next;
+        }
+    }
+    return count;
+}
 
 }  // namespace npt::nerf
-

@@ -5,7 +5,9 @@
 #include "core/sobol_sampler.h"
 #include "lights/light.h"
 #include "materials/bsdf.h"
+#include "nerf/composite.h"
 #include "nerf/hash_encoding.h"
+#include "nerf/ray_march.h"
 #include "nerf/sh_encoding.h"
 #include "render/camera.h"
 #include "render/gpu/device_buffer.h"
@@ -125,6 +127,24 @@ __global__ void nerf_encoding_kernel(nerf::HashGridConfig cfg, const float* para
     nerf::hash_encode(cfg, params, points[i], features);
     nerf::hash_encode_backward(cfg, points[i], features, d_params);
     nerf::sh_encode_deg4(normalize(points[i]), out + i * nerf::k_sh_deg4_dims);
+}
+
+// Not launched yet: compiles the occupancy-grid march and the compositing for the device until the CUDA
+// trainer uses them. One thread per ray; samples and gradients go to per-ray slices of max_samples.
+__global__ void nerf_march_composite_kernel(nerf::MarchParams mp, nerf::OccupancyGridView grid,
+                                            const Ray* rays, nerf::MarchSample* samples, const float* sigma,
+                                            const Rgb* rgb, float* dt, Rgb* color, float* d_sigma, Rgb* d_rgb,
+                                            size_t n) {
+    size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i >= n) return;
+    const size_t base = i * size_t(mp.max_samples);
+    const int count = nerf::march_ray(mp, grid, rays[i], 0.5f, samples + base);
+    for (int k = 0; k < count; ++k) dt[base + k] = samples[base + k].dt;
+    const nerf::CompositeResult fwd =
+        nerf::composite_forward(sigma + base, rgb + base, dt + base, count, 1e-4f, Rgb(1.0f));
+    color[i] = fwd.color;
+    nerf::composite_backward(sigma + base, rgb + base, dt + base, count, fwd, Rgb(1.0f), Rgb(1.0f),
+                             d_sigma + base, d_rgb + base);
 }
 
 bool device_available() {
