@@ -122,8 +122,13 @@ json read_json(const fs::path& path) {
 fs::path json_path(const fs::path& folder_or_json, const std::string& split) {
     std::error_code ec;
     if (!fs::is_directory(folder_or_json, ec)) return folder_or_json;
-    return folder_or_json /
-           (split.empty() ? std::string("transforms.json") : "transforms_" + split + ".json");
+    const fs::path single = folder_or_json / "transforms.json";
+    if (split.empty()) return single;
+    const fs::path split_file = folder_or_json / ("transforms_" + split + ".json");
+    // A capture (instant-ngp, nerfstudio, `nerfpt poses`) has one transforms.json and no splits: it is the
+    // training set. Other splits never fall back, so evaluation cannot silently run on training views.
+    if (split == "train" && !fs::exists(split_file, ec) && fs::exists(single, ec)) return single;
+    return split_file;
 }
 
 }  // namespace

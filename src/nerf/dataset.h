@@ -51,7 +51,8 @@ using ProgressFn = std::function<void(size_t done, size_t total)>;
 // fails with a message instead of taking the machine's memory.
 constexpr size_t k_max_dataset_bytes = size_t(32) << 30;
 
-// Reads `folder_or_json/transforms_{split}.json` when given a folder (`transforms.json` when split is empty),
+// Reads `folder_or_json/transforms_{split}.json` when given a folder (`transforms.json` when split is empty, or
+// when split is "train" and the folder has transforms.json but no transforms_train.json),
 // or the file itself when given a file (split is then ignored). Image paths are relative to the json; a path
 // without an extension is tried with .png, .jpg and .jpeg. Images load in parallel. Throws npt::Error naming
 // the file, the frame and the field.

@@ -3,6 +3,8 @@
 // atomically (temporary file in the same folder, fsync, rename), so a crash never leaves a half-written model.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
 
 #include "nerf/nerf_model.h"
@@ -16,5 +18,8 @@ void save_model(const std::filesystem::path& path, const NerfModel& model, bool 
 // Reads a model file. Throws npt::Error naming the path and what is wrong: not a model file, unsupported
 // version, truncated, checksum mismatch, sizes that do not match the stored config, non-finite values.
 NerfModel load_model(const std::filesystem::path& path);
+
+// The file's checksum (docs/formats.md) over `size` bytes; exposed so that tests and tools can craft files.
+uint64_t model_file_hash(const void* data, size_t size);
 
 }  // namespace npt::nerf

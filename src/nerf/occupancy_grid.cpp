@@ -19,10 +19,10 @@ constexpr int k_max_cascades = 8;
 // (2^28 cells are 1.25 GB; instant-ngp's default is 8 * 128^3 = 2^24).
 constexpr int k_max_resolution = 1024;
 constexpr size_t k_max_cells = size_t(1) << 28;
-// Optical thickness over one minimum step that a fresh cell starts at: alpha = 1 - e^-1 = 63 %, above any
-// threshold that makes sense (instant-ngp uses 0.01), so that every cell is occupied until it has been
-// estimated. It decays like any estimate: with decay 0.95 it falls below 0.01 after 90 updates.
-constexpr float k_initial_density = 1.0f;
+// A fresh cell has no estimate (0) but counts as occupied until the first update, which (during warm-up)
+// estimates every cell. Starting from a large value instead would keep empty space occupied for ~90 updates
+// (0.95^90 = 0.01), i.e. ~1400 steps in which nothing is skipped: most of a CPU run's time budget.
+constexpr float k_initial_density = 0.0f;
 
 // Uniform integer in [0, n) from 32 random bits without the bias of a modulo (Lemire's multiply-shift; the
 // remaining bias is below n / 2^32, negligible for grids of up to 2^31 cells).
@@ -143,6 +143,12 @@ void OccupancyGrid::refresh_occupied(float threshold) {
     double sum = 0.0;
     for (float d : m_density) sum += d;
     m_mean = m_density.empty() ? 0.0f : float(sum / double(m_density.size()));
+    // No cell has an estimate yet (a fresh grid, or one saved before its first update): nothing is known to
+    // be empty, so nothing is skipped.
+    if (m_mean == 0.0f) {
+        std::fill(m_occupied.begin(), m_occupied.end(), uint8_t(1));
+        return;
+    }
     const float cut = std::min(threshold, m_mean);
     for (size_t i = 0; i < m_density.size(); ++i) m_occupied[i] = m_density[i] > cut ? 1 : 0;
 }

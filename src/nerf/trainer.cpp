@@ -231,7 +231,7 @@ void Trainer::update_occupancy(uint64_t step) {
     Pcg32 rng(mix64(m_model.config.training.seed ^ 0x6f63637570616e63ULL), step);
     std::vector<uint32_t> cells;
     std::vector<Vec3> positions;
-    m_model.occupancy.plan_update(oc, int(step), rng, cells, positions);
+    m_model.occupancy.plan_update(oc, int(step / uint64_t(oc.update_interval)), rng, cells, positions);
     std::vector<float> sigma(cells.size());
     const size_t n_chunks = (cells.size() + k_chunk_samples - 1) / k_chunk_samples;
     const float* params = m_model.training->params.data();
