@@ -9,9 +9,11 @@
 #include <exception>
 
 #include "cmd_compare.h"
+#include "cmd_eval.h"
 #include "cmd_info.h"
 #include "cmd_render.h"
 #include "cmd_train.h"
+#include "cmd_view.h"
 #include "common.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -47,6 +49,10 @@ int main(int argc, char** argv) {
     CLI::App* compare_cmd = add_compare_command(app, compare_args);
     TrainArgs train_args;
     CLI::App* train_cmd = add_train_command(app, train_args);
+    EvalArgs eval_args;
+    CLI::App* eval_cmd = add_eval_command(app, eval_args);
+    ViewArgs view_args;
+    CLI::App* view_cmd = add_view_command(app, view_args);
 
     try {
         app.parse(argc, argv);
@@ -67,6 +73,8 @@ int main(int argc, char** argv) {
         if (info_cmd->parsed()) return run_info(info_args, global);
         if (compare_cmd->parsed()) return run_compare(compare_args, global);
         if (train_cmd->parsed()) return run_train(train_args, global, interrupts);
+        if (eval_cmd->parsed()) return run_eval(eval_args, global, interrupts);
+        if (view_cmd->parsed()) return run_view(view_args, global, interrupts);
     } catch (const npt::Error& e) {
         print_error(e.what());
         return k_exit_error;

@@ -33,7 +33,7 @@ expect_error() {
 # --help mentions every option of each command.
 run --help
 [[ $rc -eq 0 ]] || fail "--help: exit code $rc"
-for opt in --version --verbose --quiet render info; do
+for opt in --version --verbose --quiet render info eval view; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt --help does not mention $opt"
 done
 run render --help
@@ -45,6 +45,16 @@ run info --help
 [[ $rc -eq 0 ]] || fail "info --help: exit code $rc"
 for opt in SCENE --camera; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt info --help does not mention $opt"
+done
+run eval --help
+[[ $rc -eq 0 ]] || fail "eval --help: exit code $rc"
+for opt in MODEL DATA --split --output --every --downscale --threads PSNR SSIM metrics.json; do
+    grep -q -- "$opt" "$tmp/out" || fail "nerfpt eval --help does not mention $opt"
+done
+run view --help
+[[ $rc -eq 0 ]] || fail "view --help: exit code $rc"
+for opt in MODEL --output --camera --split --orbit --res --fov --elevation --distance --fps --threads ffmpeg "+Z"; do
+    grep -q -- "$opt" "$tmp/out" || fail "nerfpt view --help does not mention $opt"
 done
 run --version
 if [[ $rc -ne 0 ]] || ! grep -qE '^nerfpt [0-9]+\.[0-9]+' "$tmp/out"; then
@@ -73,6 +83,35 @@ expect_error 1 "camera 'nope'" info "$scene" --camera nope
 
 # The output checks come before the scene is loaded: a missing scene and a bad output report the output.
 expect_error 1 "no_such_folder" render "$tmp/missing.gltf" -o "$tmp/no_such_folder/a.exr"
+
+# eval and view check their paths before loading anything, so these need no real model: a file that is not
+# a model stands in where the check must stop earlier.
+printf 'not a model' >"$tmp/bad.npt"
+expect_error 2 "--every" eval "$tmp/bad.npt" "$tmp" --every 0
+expect_error 2 "--downscale" eval "$tmp/bad.npt" "$tmp" --downscale 0
+expect_error 2 "excludes" view "$tmp/bad.npt" -o "$tmp/a.png" --camera "$tmp:0" --orbit 10
+expect_error 2 "--elevation" view "$tmp/bad.npt" -o "$tmp/a.mp4" --elevation 90
+expect_error 2 "--res" view "$tmp/bad.npt" -o "$tmp/a.mp4" --res 0x10
+expect_error 1 "MODEL.*missing\.npt.*not found" eval "$tmp/missing.npt" "$tmp"
+expect_error 1 "MODEL.*is a folder" eval "$tmp" "$tmp"
+expect_error 1 "DATA.*no_data" eval "$tmp/bad.npt" "$tmp/no_data"
+expect_error 1 "--output.*not a folder" eval "$tmp/bad.npt" "$tmp" -o "$tmp/bad.npt"
+expect_error 1 "bad\.npt" eval "$tmp/bad.npt" "$tmp"
+expect_error 1 "MODEL.*missing\.npt" view "$tmp/missing.npt" -o "$tmp/a.mp4"
+expect_error 1 "\.mp4 or \.png" view "$tmp/bad.npt" -o "$tmp/a.gif"
+expect_error 1 "no_such_folder.*does not exist" view "$tmp/bad.npt" -o "$tmp/no_such_folder/a.mp4"
+expect_error 1 "DATA:INDEX" view "$tmp/bad.npt" -o "$tmp/a.png" --camera nothing
+expect_error 1 "no_data" view "$tmp/bad.npt" -o "$tmp/a.png" --camera "$tmp/no_data:3"
+expect_error 1 "one image.*\.png" view "$tmp/bad.npt" -o "$tmp/a.mp4" --camera "$tmp:0"
+expect_error 1 "even width and height" view "$tmp/bad.npt" -o "$tmp/a.mp4" --res 101x100
+expect_error 1 "bad\.npt" view "$tmp/bad.npt" -o "$tmp/a.png"
+# Without ffmpeg on PATH an .mp4 is refused before any work (nerfpt itself runs from its full path).
+printf '#!/bin/sh\nPATH=/nonexistent exec "%s" "$@"\n' "$nerfpt" >"$tmp/nerfpt_no_ffmpeg"
+chmod +x "$tmp/nerfpt_no_ffmpeg"
+real_nerfpt=$nerfpt
+nerfpt="$tmp/nerfpt_no_ffmpeg"
+expect_error 1 "ffmpeg on PATH" view "$tmp/bad.npt" -o "$tmp/a.mp4"
+nerfpt=$real_nerfpt
 
 # A tiny render works and writes both files.
 run -q render "$scene" -o "$tmp/small.exr" --res 16x12 --spp 1 --threads 1

@@ -1,0 +1,26 @@
+// `nerfpt eval`: render a trained model from a data set's held-out cameras and score it against the ground
+// truth with PSNR and SSIM as the NeRF papers do (white background, sRGB-encoded values), optionally writing
+// the renders, side-by-side comparisons and metrics.json.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "common.h"
+
+namespace npt::cli {
+
+struct EvalArgs {
+    std::string model;
+    std::string data;
+    std::string split = "test";
+    std::string output;  // folder; empty: print the metrics only
+    int every = 1;
+    int downscale = 1;
+    int threads = 0;
+};
+
+CLI::App* add_eval_command(CLI::App& app, EvalArgs& args);
+int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard& interrupts);
+
+}  // namespace npt::cli

@@ -1,0 +1,265 @@
+// `nerfpt eval` and `nerfpt view` end to end on a model trained for a few seconds on the sphere data set:
+// eval's numbers are the ones render_view + ground_truth_image + psnr/ssim give for the same view, its files
+// hold what they should (the comparison's ground-truth panel survives the sRGB handling to 8-bit rounding),
+// view --camera reproduces eval's render, and the default orbit frames the model.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/image_io.h"
+#include "core/image_metrics.h"
+#include "nerf/eval_images.h"
+#include "nerf/model_file.h"
+#include "nerf/render_view.h"
+#include "nerf_test_scene.h"
+#include "test_support.h"
+
+namespace npt::nerf {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path cli() { return fs::path(NERFPT_BINARY_DIR) / "nerfpt"; }
+
+std::string slurp(const fs::path& p) {
+    std::ifstream f(p);
+    return {std::istreambuf_iterator<char>(f), {}};
+}
+
+// Runs the binary with stdout and stderr into `log`, with PATH replaced when `path_env` is given; returns the
+// exit code.
+int run_cli(std::vector<std::string> args, const fs::path& log, const std::string& path_env = "") {
+    args.insert(args.begin(), cli().string());
+    const pid_t pid = fork();
+    if (pid == 0) {
+        std::vector<char*> argv;
+        for (auto& a : args) argv.push_back(a.data());
+        argv.push_back(nullptr);
+        const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        dup2(fd, 1);
+        dup2(fd, 2);
+        if (!path_env.empty()) setenv("PATH", path_env.c_str(), 1);
+        execv(argv[0], argv.data());
+        _exit(127);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+// Each test trains its own model (a fraction of a second) in its own folder: ctest runs the tests as
+// separate processes, possibly at once.
+class EvalViewCli : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        if (!fs::exists(cli())) GTEST_SKIP() << "nerfpt binary not built: " << cli();
+        m_dir = test::temp_dir();
+        test::write_dataset(test::make_sphere_scene({.views = 12, .size = 32, .view_seed = 1}),
+                            m_dir / "train", 40.0f);
+        test::write_dataset(test::make_sphere_scene({.views = 3, .size = 32, .view_seed = 2}), m_dir / "test",
+                            40.0f);
+        test::write_file(m_dir / "config.json",
+                         R"({"encoding": {"levels": 4, "log2_table_size": 12, "finest_resolution": 64},
+                             "occupancy": {"resolution": 16, "update_interval": 4, "warmup_steps": 16},
+                             "training": {"batch_samples": 2048}})");
+        ASSERT_EQ(run_cli({"train", (m_dir / "train" / "transforms.json").string(), "-o",
+                           (m_dir / "m.npt").string(), "--config", (m_dir / "config.json").string(),
+                           "--steps", "100", "-q"},
+                          m_dir / "train.log"),
+                  0)
+            << slurp(m_dir / "train.log");
+    }
+    const fs::path& dir() const { return m_dir; }
+    fs::path test_json() const { return m_dir / "test" / "transforms.json"; }
+
+    fs::path m_dir;
+};
+
+TEST_F(EvalViewCli, EvalNumbersAndFiles) {
+    const fs::path out = dir() / "eval";  // created by eval
+    ASSERT_EQ(run_cli({"eval", (dir() / "m.npt").string(), test_json().string(), "-o", out.string(), "-q"},
+                      dir() / "eval.log"),
+              0)
+        << slurp(dir() / "eval.log");
+    const std::string log = slurp(dir() / "eval.log");
+    EXPECT_NE(log.find("mean over 3 views"), std::string::npos) << log;
+
+    const nlohmann::json m = nlohmann::json::parse(slurp(out / "metrics.json"));
+    ASSERT_EQ(m.at("images").size(), 3u);
+    EXPECT_EQ(m.at("data"), test_json().string());
+    const NerfModel model = load_model(dir() / "m.npt");
+    const Dataset test = load_dataset(test_json(), "");
+    double sum_psnr = 0, sum_ssim = 0;
+    for (size_t k = 0; k < 3; ++k) {
+        const nlohmann::json& e = m.at("images")[k];
+        const std::string name = e.at("name");
+        EXPECT_EQ(name, "r_" + std::to_string(k));
+        // The same numbers as the library gives for the same view (the render is deterministic).
+        const Image render = render_view(model, test.cameras[k], {});
+        const Image truth = ground_truth_image(test, k, Rgb(1.0f, 1.0f, 1.0f));
+        EXPECT_DOUBLE_EQ(e.at("psnr").get<double>(), psnr(render, truth)) << name;
+        EXPECT_DOUBLE_EQ(e.at("ssim").get<double>(), ssim(render, truth)) << name;
+        EXPECT_TRUE(std::isfinite(e.at("psnr").get<double>())) << name;
+        sum_psnr += e.at("psnr").get<double>();
+        sum_ssim += e.at("ssim").get<double>();
+
+        const Image png = read_image(out / (name + ".png"), /*srgb=*/false);
+        const Image strip = read_image(out / (name + "_compare.png"), /*srgb=*/false);
+        ASSERT_EQ(png.width, 32);
+        ASSERT_EQ(strip.width, 96);
+        ASSERT_EQ(strip.height, 32);
+        // Written values are the encoded values as they are: 8-bit rounding is the only change.
+        float worst = 0;
+        for (int y = 0; y < 32; ++y)
+            for (int x = 0; x < 32; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    worst = std::max(worst, std::abs(strip.at(x, y)[c] - truth.at(x, y)[c]));
+                    worst = std::max(worst, std::abs(strip.at(32 + x, y)[c] - render.at(x, y)[c]));
+                    worst = std::max(worst, std::abs(png.at(x, y)[c] - render.at(x, y)[c]));
+                }
+        EXPECT_LE(worst, 0.5f / 255.0f + 1e-5f) << name;
+    }
+    EXPECT_NEAR(m.at("mean").at("psnr").get<double>(), sum_psnr / 3, 1e-12);
+    EXPECT_NEAR(m.at("mean").at("ssim").get<double>(), sum_ssim / 3, 1e-12);
+
+    // --every 2 evaluates views 0 and 2 only.
+    ASSERT_EQ(run_cli({"eval", (dir() / "m.npt").string(), test_json().string(), "--every", "2", "-q"},
+                      dir() / "every.log"),
+              0);
+    const std::string every = slurp(dir() / "every.log");
+    EXPECT_NE(every.find("r_0 "), std::string::npos) << every;
+    EXPECT_EQ(every.find("r_1 "), std::string::npos) << every;
+    EXPECT_NE(every.find("r_2 "), std::string::npos) << every;
+}
+
+TEST_F(EvalViewCli, ViewCameraMatchesTheRender) {
+    const fs::path png = dir() / "cam1.png";
+    ASSERT_EQ(run_cli({"view", (dir() / "m.npt").string(), "-o", png.string(), "--camera",
+                       test_json().string() + ":1", "-q"},
+                      dir() / "view_cam.log"),
+              0)
+        << slurp(dir() / "view_cam.log");
+    const NerfModel model = load_model(dir() / "m.npt");
+    const Dataset test = load_dataset(test_json(), "");
+    const Image render = render_view(model, test.cameras[1], {});
+    const Image img = read_image(png, /*srgb=*/false);
+    ASSERT_EQ(img.width, 32);
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x)
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(img.at(x, y)[c], render.at(x, y)[c], 0.5f / 255.0f + 1e-5f);
+    // --res rescales the intrinsics: the same view at twice the size.
+    ASSERT_EQ(run_cli({"view", (dir() / "m.npt").string(), "-o", png.string(), "--camera",
+                       test_json().string() + ":1", "--res", "64x64", "-q"},
+                      dir() / "view_cam.log"),
+              0);
+    EXPECT_EQ(read_image(png).width, 64);
+}
+
+TEST_F(EvalViewCli, DefaultOrbitFramesTheModel) {
+    ASSERT_EQ(run_cli({"view", (dir() / "m.npt").string(), "-o", (dir() / "spin.png").string(), "--orbit",
+                       "3", "--res", "24x16", "-q"},
+                      dir() / "orbit.log"),
+              0)
+        << slurp(dir() / "orbit.log");
+    for (int k = 0; k < 3; ++k) {
+        const fs::path f = dir() / ("spin_000" + std::to_string(k) + ".png");
+        ASSERT_TRUE(fs::exists(f)) << f;
+        const Image img = read_image(f, /*srgb=*/false);
+        EXPECT_EQ(img.width, 24);
+        EXPECT_EQ(img.height, 16);
+        // The spheres lie within radius 1 of the origin and the default orbit sits 4 away, as the training
+        // cameras did: the model fills part of the frame (not none of it, not all of it).
+        int covered = 0;
+        for (int y = 0; y < 16; ++y)
+            for (int x = 0; x < 24; ++x)
+                covered += img.at(x, y)[0] + img.at(x, y)[1] + img.at(x, y)[2] < 2.7f;
+        EXPECT_GT(covered, 24 * 16 / 20) << f;
+        EXPECT_LT(covered, 24 * 16 * 4 / 5) << f;
+    }
+    // A real video needs ffmpeg; where it is installed, check that one comes out.
+    if (std::system("command -v ffmpeg >/dev/null 2>&1") == 0) {
+        const fs::path mp4 = dir() / "spin.mp4";
+        ASSERT_EQ(run_cli({"view", (dir() / "m.npt").string(), "-o", mp4.string(), "--orbit", "3", "--res",
+                           "24x16", "-q"},
+                          dir() / "mp4.log"),
+                  0)
+            << slurp(dir() / "mp4.log");
+        EXPECT_GT(fs::file_size(mp4), 0u);
+    }
+}
+
+// The .mp4 path with a stand-in ffmpeg on PATH that records how it was called: the command line of the brief,
+// every frame in the folder it is given, that folder gone afterwards; and ffmpeg's own error reaches the user
+// on one line.
+TEST_F(EvalViewCli, VideoGoesThroughFfmpegAndCleansUp) {
+    const fs::path bin = dir() / "bin";
+    fs::create_directories(bin);
+    const fs::path record = dir() / "ffmpeg_args.txt";
+    test::write_file(bin / "ffmpeg",
+                     "#!/bin/sh\n"
+                     "echo \"$@\" > '" +
+                         record.string() +
+                         "'\n"
+                         "for a; do last=$a; done\n"
+                         "while [ $# -gt 0 ]; do [ \"$1\" = -i ] && in=$2; shift; done\n"
+                         "frames=$(dirname \"$in\")\n"
+                         "echo \"$frames\" >> '" +
+                         record.string() +
+                         "'\n"
+                         "ls \"$frames\" | grep -c '^frame_[0-9]*\\.png$' >> '" +
+                         record.string() +
+                         "'\n"
+                         "[ -n \"$FAIL\" ] && { echo \"Unknown encoder 'libx264'\" >&2; exit 1; }\n"
+                         "echo video > \"$last\"\n");
+    fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
+    const std::string path = bin.string() + ":/usr/bin:/bin";
+    const fs::path mp4 = dir() / "spin.mp4";
+    ASSERT_EQ(run_cli({"view", (dir() / "m.npt").string(), "-o", mp4.string(), "--orbit", "3", "--res",
+                       "24x16", "--fps", "12", "-q"},
+                      dir() / "mp4.log", path),
+              0)
+        << slurp(dir() / "mp4.log");
+    EXPECT_EQ(slurp(mp4), "video\n");
+    std::ifstream f(record);
+    std::string args, frames, count;
+    std::getline(f, args);
+    std::getline(f, frames);
+    std::getline(f, count);
+    EXPECT_NE(args.find("-y"), std::string::npos) << args;
+    EXPECT_NE(args.find("-framerate 12 -i " + frames + "/frame_%04d.png -pix_fmt yuv420p -c:v libx264 " +
+                        mp4.string()),
+              std::string::npos)
+        << args;
+    EXPECT_EQ(count, "3");
+    EXPECT_FALSE(fs::exists(frames)) << "temporary frames left in " << frames;
+
+    // A failing ffmpeg: exit code 1, its message on one line, the frames cleaned up all the same.
+    setenv("FAIL", "1", 1);
+    const int rc = run_cli(
+        {"view", (dir() / "m.npt").string(), "-o", mp4.string(), "--orbit", "2", "--res", "24x16", "-q"},
+        dir() / "fail.log", path);
+    unsetenv("FAIL");
+    EXPECT_EQ(rc, 1);
+    const std::string log = slurp(dir() / "fail.log");
+    EXPECT_NE(log.find("nerfpt: error: ffmpeg failed"), std::string::npos) << log;
+    EXPECT_NE(log.find("Unknown encoder 'libx264'"), std::string::npos) << log;
+    EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;
+    std::ifstream f2(record);
+    std::getline(f2, args);
+    std::getline(f2, frames);
+    EXPECT_FALSE(fs::exists(frames)) << "temporary frames left in " << frames;
+}
+
+}  // namespace
+}  // namespace npt::nerf
