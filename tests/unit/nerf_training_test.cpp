@@ -23,7 +23,10 @@ NerfConfig small_config() {
     c.encoding.grid.log2_table_size = 15;
     c.encoding.finest_resolution = 128.0f;
     c.occupancy.resolution = 32;
-    c.occupancy.warmup_steps = 64;
+    // Counted in instant-ngp steps of 2^18 samples, i.e. 32 of these 2^13-sample steps: an update every 32
+    // steps, the first 8 of them over every cell.
+    c.occupancy.update_interval = 1;
+    c.occupancy.warmup_steps = 8;
     c.training.batch_samples = 1 << 13;
     return c;
 }

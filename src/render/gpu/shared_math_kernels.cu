@@ -7,6 +7,7 @@
 #include "materials/bsdf.h"
 #include "nerf/composite.h"
 #include "nerf/hash_encoding.h"
+#include "nerf/nerf_model.h"
 #include "nerf/ray_march.h"
 #include "nerf/sh_encoding.h"
 #include "render/camera.h"
@@ -145,6 +146,15 @@ __global__ void nerf_march_composite_kernel(nerf::MarchParams mp, nerf::Occupanc
     color[i] = fwd.color;
     nerf::composite_backward(sigma + base, rgb + base, dt + base, count, fwd, Rgb(1.0f), Rgb(1.0f),
                              d_sigma + base, d_rgb + base);
+}
+
+// The per-point field query the path tracer will run on the GPU (issue 6); compiled here so that host-only code
+// in the NeRF headers fails the CUDA build. Not launched yet.
+__global__ void nerf_field_kernel(nerf::NerfFieldView field, const Vec3* points, float* sigma, Rgb* rgb,
+                                  size_t n) {
+    size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i >= n) return;
+    field.query(points[i], normalize(points[i] - Vec3(0.5f)), sigma + i, rgb + i);
 }
 
 bool device_available() {
