@@ -95,5 +95,31 @@ TEST(TrainResume, SigkillThenResumeEqualsAnUninterruptedRun) {
     EXPECT_EQ(a.occupancy.density(), b.occupancy.density());
 }
 
+TEST(TrainResume, InterruptSavesACheckpointAndExits130) {
+    if (!fs::exists(cli())) GTEST_SKIP() << "nerfpt binary not built: " << cli();
+    const fs::path dir = test::temp_dir();
+    test::write_dataset(test::make_sphere_scene({.views = 4, .size = 16, .view_seed = 5}), dir / "data", 40.0f);
+    test::write_file(dir / "config.json",
+                     R"({"encoding": {"levels": 4, "log2_table_size": 12, "finest_resolution": 64},
+                         "occupancy": {"resolution": 16}, "training": {"batch_samples": 2048}})");
+    const fs::path model = dir / "m.npt", log = dir / "train.log";
+    // Checkpoints only every 100000 steps: the file can only come from the interrupt.
+    const pid_t pid = spawn({cli().string(), "train", (dir / "data").string(), "-o", model.string(), "--config",
+                             (dir / "config.json").string(), "--steps", "100000", "--checkpoint-every", "100000"},
+                            log);
+    // Wait until training runs (its first progress line), then interrupt it like Ctrl-C does.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (slurp(log).find("step") == std::string::npos && std::chrono::steady_clock::now() < deadline)
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    kill(pid, SIGINT);
+    EXPECT_EQ(wait_exit(pid), 130) << slurp(log);
+    const std::string out = slurp(log);
+    EXPECT_NE(out.find("--resume"), std::string::npos) << out;  // tells the user how to continue
+    const NerfModel m = load_model(model);
+    ASSERT_TRUE(m.training);
+    EXPECT_GT(m.training->adam.step, 0u);
+    EXPECT_LT(m.training->adam.step, 100000u);
+}
+
 }  // namespace
 }  // namespace npt::nerf
