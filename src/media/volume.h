@@ -6,6 +6,10 @@
 #include "core/platform.h"
 #include "core/vec.h"
 #include "media/grid.h"
+#include "nerf/nerf_field.h"
+#include "nerf/nerf_placement.h"
+#include "nerf/occupancy_view.h"
+#include "nerf/ray_march.h"
 
 namespace npt::media {
 
@@ -22,12 +26,25 @@ struct MajorantView {
     }
 };
 
+// A NeRF model queried directly (a `.npt` file in the cube): the field, its occupancy grid for skipping empty
+// space, and the map from the cube's local space into model space (nerf_placement.h).
+struct NerfVolumeView {
+    nerf::NerfFieldView field;
+    nerf::OccupancyGridView occupancy;
+    nerf::MarchParams march;  // aabb = the crop box in model space
+    nerf::LocalToModel local_to_model;
+};
+
+enum class VolumeKind : uint8_t { Grid, Nerf };
+
 struct VolumeView {
+    VolumeKind kind = VolumeKind::Grid;
+    NerfVolumeView nerf;  // kind == Nerf
     Affine3 world_to_local;                  // inverse of the node's transform
     Vec3 local_min{-1.0f}, local_max{1.0f};  // the cube in local space
-    GridView grid;
-    MajorantView majorant;
-    float density_scale = 1.0f;   // sigma per WORLD unit = density_scale * density
+    GridView grid;          // kind == Grid
+    MajorantView majorant;  // kind == Grid
+    float density_scale = 1.0f;   // grid: sigma per WORLD unit = density_scale * density; NeRF: multiplies sigma
     float emission_scale = 1.0f;  // c = emission_scale * color
     float step_voxels = 0.25f;    // march step as a fraction of a voxel along the ray
     bool casts_shadows = true;

@@ -151,6 +151,44 @@ NPT_HD NPT_INLINE void march_overlapping(const VolumeOnRay* rs, const int* activ
     }
 }
 
+// sRGB-encoded value -> linear (NeRFs predict the stored image values); NPT_HD twin of core/image_io.h's.
+NPT_HD NPT_INLINE float srgb_decode(float v) {
+    v = fminf(fmaxf(v, 0.0f), 1.0f);
+    return v <= 0.04045f ? v * (1.0f / 12.92f) : powf((v + 0.055f) * (1.0f / 1.055f), 2.4f);
+}
+
+// A NeRF volume over [ta, tb] of the world ray: marched in model space through its occupancy grid, each sample
+// absorbing with sigma (per model unit, integrated over the model-space step, so the node's scale does not
+// change how opaque the object looks) and emitting its colour for the ray's own direction (view-dependent),
+// decoded to linear. Samples are evaluated one at a time here (NPT_HD).
+NPT_HD NPT_INLINE void march_nerf(const VolumeView& v, const Ray& ray, float ta, float tb, float xi,
+                                  Accumulator& acc) {
+    const NerfVolumeView& n = v.nerf;
+    const Vec3 lo = v.world_to_local.apply(ray.o), ld = v.world_to_local.apply_vector(ray.d);
+    const Vec3 om = n.local_to_model.point(lo), dm = n.local_to_model.vector(ld);
+    const float len = length(dm);  // model units per unit of t
+    if (!(len > 0.0f) || !isfinite(len)) return;
+    const Vec3 dir = dm / len;
+    // The model ray starts at ta, so the march's own box test and t_max clip it to [ta, tb].
+    const Ray mray{om + dir * (ta * len), dir};
+    nerf::MarchParams mp = n.march;
+    mp.t_max = (tb - ta) * len;
+    nerf::march_ray_visit(mp, n.occupancy, mray, xi, [&](const nerf::MarchSample& s) {
+        float sigma = 0.0f;
+        Rgb rgb;
+        if (acc.with_emission) {
+            n.field.query(s.position, dir, &sigma, &rgb);
+            rgb = Rgb(srgb_decode(rgb.x), srgb_decode(rgb.y), srgb_decode(rgb.z)) * v.emission_scale;
+        } else {
+            sigma = n.field.density(s.position);
+        }
+        // Every sample stands for a whole step: with the lattice offset xi uniform in [0,1) the expected number
+        // of samples in a segment of length L is L / dt, so the expected optical depth is right at both ends.
+        acc.add(sigma * v.density_scale, rgb, s.dt);
+        return !acc.done();
+    });
+}
+
 // Integrates every volume the ray crosses on [t_begin, t_end]. `shadow`: transmittance only, and only volumes
 // that cast shadows. `xi` in [0,1) offsets the step lattice.
 NPT_HD NPT_INLINE VolumeResult integrate_volumes(Span<const VolumeView> volumes, const Ray& ray,
@@ -166,10 +204,11 @@ NPT_HD NPT_INLINE VolumeResult integrate_volumes(Span<const VolumeView> volumes,
         if (!intersect_box(lo, ld, v.local_min, v.local_max, t_begin, t_end, &t0, &t1)) continue;
         VolumeOnRay& r = on_ray[count++];
         r.v = &v;
-        r.xo = v.grid.local_to_index.apply(lo);
-        r.xd = v.grid.local_to_index.apply_vector(ld);
         r.t0 = t0;
         r.t1 = t1;
+        if (v.kind == VolumeKind::Nerf) continue;
+        r.xo = v.grid.local_to_index.apply(lo);
+        r.xd = v.grid.local_to_index.apply_vector(ld);
         float voxels_per_t = length(r.xd);
         r.step = v.step_voxels / fmaxf(voxels_per_t, 1e-20f);
     }
@@ -197,10 +236,18 @@ NPT_HD NPT_INLINE VolumeResult integrate_volumes(Span<const VolumeView> volumes,
         int n_active = 0;
         for (int i = 0; i < count; ++i)
             if (on_ray[i].t0 <= ta && on_ray[i].t1 >= tb) active[n_active++] = i;
-        if (n_active == 1)
-            march_skipping_empty(on_ray[active[0]], ta, tb, xi, acc);
-        else if (n_active > 1)
-            march_overlapping(on_ray, active, n_active, ta, tb, xi, acc);
+        // NeRFs are marched on their own; where one overlaps other volumes, it is composited after them within
+        // the piece (an approximation: it does not interleave with them).
+        int grids[k_max_volumes_per_ray];
+        int n_grids = 0;
+        for (int k = 0; k < n_active; ++k)
+            if (on_ray[active[k]].v->kind == VolumeKind::Grid) grids[n_grids++] = active[k];
+        if (n_grids == 1)
+            march_skipping_empty(on_ray[grids[0]], ta, tb, xi, acc);
+        else if (n_grids > 1)
+            march_overlapping(on_ray, grids, n_grids, ta, tb, xi, acc);
+        for (int k = 0; k < n_active && !acc.done(); ++k)
+            if (on_ray[active[k]].v->kind == VolumeKind::Nerf) march_nerf(*on_ray[active[k]].v, ray, ta, tb, xi, acc);
     }
     result.radiance = acc.radiance;
     result.transmittance = acc.done() ? 0.0f : expf(acc.log_t);

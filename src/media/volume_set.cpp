@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "nerf/model_file.h"
 
 namespace npt::media {
 
@@ -34,13 +35,31 @@ VolumeDesc parse_volume_desc(const std::string& extras_json, const std::string& 
     const auto& v = j["volume"];
     VolumeDesc d;
     if (!v.contains("file") || !v["file"].is_string() || v["file"].get<std::string>().empty())
-        throw Error(where + ": extras.volume.file: expected the path of a grid file");
+        throw Error(where + ": extras.volume.file: expected the path of a grid file or a nerfpt model (.npt)");
     d.file = v["file"].get<std::string>();
     d.density_scale = number_field(v, "density_scale", 1.0f, where);
     d.emission_scale = number_field(v, "emission_scale", 1.0f, where);
     d.step_voxels = number_field(v, "step_voxels", 0.25f, where);
     if (d.step_voxels < 0.01f || d.step_voxels > 4.0f)
         throw Error(where + ": extras.volume.step_voxels: must lie in [0.01, 4]");
+    if (v.contains("crop")) {
+        const auto& c = v["crop"];
+        auto corner = [&](const char* key, Vec3* out) {
+            if (!c.is_object() || !c.contains(key) || !c[key].is_array() || c[key].size() != 3)
+                throw Error(where + ": extras.volume.crop." + key + ": expected 3 numbers (model space)");
+            for (int a = 0; a < 3; ++a) {
+                if (!c[key][a].is_number() || !std::isfinite(c[key][a].get<double>()))
+                    throw Error(where + ": extras.volume.crop." + key + ": expected 3 finite numbers");
+                (*out)[a] = c[key][a].get<float>();
+            }
+        };
+        corner("min", &d.crop.min);
+        corner("max", &d.crop.max);
+        for (int a = 0; a < 3; ++a)
+            if (!(d.crop.max[a] > d.crop.min[a]))
+                throw Error(where + ": extras.volume.crop: max must exceed min on every axis");
+        d.has_crop = true;
+    }
     if (v.contains("casts_shadows")) {
         if (!v["casts_shadows"].is_boolean())
             throw Error(where + ": extras.volume.casts_shadows: expected true or false");
@@ -58,18 +77,6 @@ VolumeSet::VolumeSet(const scene::Scene& scene) {
         std::filesystem::path file = desc.file;
         if (file.is_relative()) file = declared.parent_path() / file;
         std::string ext = file.extension().string();
-        if (ext == ".npt")
-            throw Error(where + ": extras.volume.file '" + desc.file +
-                        "': nerfpt model files are not supported in scenes yet; bake the model to a grid");
-
-        GridLoadOptions opt;
-        opt.local_min = inst.local_min;
-        opt.local_max = inst.local_max;
-        Owned owned;
-        owned.grid = load_volume_grid(file, opt);
-        owned.majorant = build_majorant(owned.grid, &owned.mx, &owned.my, &owned.mz);
-        m_owned.push_back(std::move(owned));
-
         Mat4 world_to_local = inst.local_to_world.inverse();
         VolumeView v;
         v.world_to_local = affine_from(world_to_local);
@@ -79,6 +86,48 @@ VolumeSet::VolumeSet(const scene::Scene& scene) {
         v.emission_scale = desc.emission_scale;
         v.step_voxels = desc.step_voxels;
         v.casts_shadows = desc.casts_shadows;
+        if (ext == ".npt") {
+            Owned owned;
+            try {
+                owned.model = std::make_unique<nerf::NerfModel>(nerf::load_model(file));
+            } catch (const Error& e) {
+                throw Error(where + ": " + e.what());
+            }
+            const nerf::NerfModel& m = *owned.model;
+            owned.model->training.reset();  // rendering needs the averaged parameters only
+            v.kind = VolumeKind::Nerf;
+            nerf::CropBox box;
+            const float half = 0.5f * m.aabb_scale;
+            box.min = Vec3(0.5f - half);
+            box.max = Vec3(0.5f + half);
+            if (desc.has_crop) {
+                box.min = vmax(box.min, desc.crop.min);
+                box.max = vmin(box.max, desc.crop.max);
+                if (!(box.max.x > box.min.x && box.max.y > box.min.y && box.max.z > box.min.z))
+                    throw Error(where + ": extras.volume.crop does not overlap the model's box (0.5 +- " +
+                                std::to_string(half) + " in model space)");
+            }
+            v.nerf.field = m.field();
+            v.nerf.occupancy = m.occupancy.view();
+            v.nerf.march = m.march_params();
+            v.nerf.march.aabb_min = box.min;
+            v.nerf.march.aabb_max = box.max;
+            v.nerf.local_to_model = nerf::local_to_model(inst.local_min, inst.local_max, box);
+            spdlog::debug("{}: NeRF model {} ({} parameters), queried directly", where, file.string(),
+                          m.params.size());
+            m_owned.push_back(std::move(owned));
+            m_views.push_back(v);
+            continue;
+        }
+
+        GridLoadOptions opt;
+        opt.local_min = inst.local_min;
+        opt.local_max = inst.local_max;
+        Owned owned;
+        owned.grid = load_volume_grid(file, opt);
+        owned.majorant = build_majorant(owned.grid, &owned.mx, &owned.my, &owned.mz);
+        m_owned.push_back(std::move(owned));
+
         if (ext == ".bin") {
             // instant-ngp sigma is per unit of its unit cube, taken to span the cube's longest world side.
             Vec3 size = inst.local_max - inst.local_min;
@@ -91,11 +140,12 @@ VolumeSet::VolumeSet(const scene::Scene& scene) {
             if (longest > 0.0f) v.density_scale /= longest;
         }
         m_views.push_back(v);
-        spdlog::debug("{}: volume grid {}x{}x{} from {}", where, owned.grid.nx, owned.grid.ny, owned.grid.nz,
-                      file.string());
+        spdlog::debug("{}: volume grid {}x{}x{} from {}", where, m_owned.back().grid.nx, m_owned.back().grid.ny,
+                      m_owned.back().grid.nz, file.string());
     }
     // Views point into m_owned, which no longer moves.
     for (size_t i = 0; i < m_views.size(); ++i) {
+        if (m_views[i].kind != VolumeKind::Grid) continue;  // a model's vectors did not move with it
         m_views[i].grid = m_owned[i].grid.view();
         m_views[i].majorant =
             MajorantView{m_owned[i].mx, m_owned[i].my, m_owned[i].mz, m_owned[i].majorant.data()};

@@ -2,6 +2,7 @@
 // majorant grid, and exposes the VolumeView array the integrator reads. The scene must outlive it.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@
 #include "media/placement.h"
 #include "media/volume.h"
 #include "media/volume_grid.h"
+#include "nerf/nerf_model.h"
 #include "scene/scene.h"
 
 namespace npt::media {
@@ -22,6 +24,9 @@ struct VolumeDesc {
     float emission_scale = 1.0f;
     bool casts_shadows = true;
     float step_voxels = 0.25f;  // ray-marching step in voxels along the ray
+    // NeRF models only: the part of model space that fills the cube (default: the model's whole aabb).
+    bool has_crop = false;
+    nerf::CropBox crop;
 };
 
 // Parses `extras_json` of a VolumeInstance; `where` names it in errors ("scene.gltf: node 'volume'").
@@ -39,6 +44,7 @@ class VolumeSet {
         VolumeGrid grid;
         std::vector<float> majorant;
         int mx = 0, my = 0, mz = 0;
+        std::unique_ptr<nerf::NerfModel> model;  // a `.npt` file: queried directly
     };
     std::vector<Owned> m_owned;
     std::vector<VolumeView> m_views;

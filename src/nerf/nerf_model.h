@@ -1,7 +1,5 @@
 // A trained (or training) NeRF: its configuration, where it sits relative to the training cameras, its
-// parameters and its occupancy grid. The parameter array is laid out as instant-ngp's snapshots are:
-// density MLP weights, colour MLP weights, then the hash grid. NerfFieldView is the NPT_HD per-point query
-// the path tracer and the GPU use; training evaluates the same maths batched (nerf_network.h).
+// parameters and its occupancy grid. The per-point query (NerfFieldView) is in nerf_field.h.
 #pragma once
 
 #include <math.h>
@@ -10,57 +8,16 @@
 #include <optional>
 #include <vector>
 
-#include "core/platform.h"
 #include "core/transform.h"
-#include "core/vec.h"
 #include "nerf/adam.h"
-#include "nerf/hash_encoding.h"
-#include "nerf/mlp.h"
 #include "nerf/nerf_config.h"
+#include "nerf/nerf_field.h"
 #include "nerf/occupancy_grid.h"
 #include "nerf/ray_march.h"
-#include "nerf/sh_encoding.h"
 
 namespace npt::nerf {
 
-// Where each part of the parameter array starts, and the shapes that read it.
-struct NerfLayout {
-    HashGridConfig grid;  // with per_level_scale resolved for the model's aabb_scale
-    MlpShape density;     // inputs: grid.output_dims()
-    MlpShape color;       // inputs: density.outputs + 16 (SH degree 4)
-    size_t density_offset = 0, color_offset = 0, grid_offset = 0, total = 0;
-};
-
 NerfLayout make_layout(const NerfConfig& config, float aabb_scale);
-
-// The density activation: exp, with the gradient clamped as instant-ngp does (exp of the clamped input).
-NPT_HD NPT_INLINE float density_activation(float raw) { return expf(fminf(raw, 15.0f)); }
-NPT_HD NPT_INLINE float density_activation_grad(float raw) { return expf(clampf(raw, -15.0f, 15.0f)); }
-NPT_HD NPT_INLINE float sigmoidf(float x) { return 1.0f / (1.0f + expf(-x)); }
-
-// The field at one point, for renderers: plain pointers, copyable to the GPU.
-struct NerfFieldView {
-    NerfLayout layout;
-    const float* params = nullptr;
-
-    // sigma (per model-space unit) at a model-space point.
-    NPT_HD float density(Vec3 p) const {
-        float enc[k_max_mlp_width], out[k_max_mlp_width];
-        hash_encode(layout.grid, params + layout.grid_offset, p, enc);
-        mlp_forward(layout.density, params + layout.density_offset, enc, out);
-        return density_activation(out[0]);
-    }
-    // sigma and colour (sigmoid outputs, the stored sRGB-encoded values) seen from unit direction d.
-    NPT_HD void query(Vec3 p, Vec3 d, float* sigma, Rgb* rgb) const {
-        float enc[k_max_mlp_width], col_in[k_max_mlp_width], out[k_max_mlp_width];
-        hash_encode(layout.grid, params + layout.grid_offset, p, enc);
-        mlp_forward(layout.density, params + layout.density_offset, enc, col_in);
-        *sigma = density_activation(col_in[0]);
-        sh_encode_deg4(d, col_in + layout.density.outputs);
-        mlp_forward(layout.color, params + layout.color_offset, col_in, out);
-        *rgb = Rgb(sigmoidf(out[0]), sigmoidf(out[1]), sigmoidf(out[2]));
-    }
-};
 
 // What only training needs: the raw (not averaged) parameters and the optimizer's state. Randomness is a
 // function of (seed, step), so the step is all that is needed to continue exactly.

@@ -18,6 +18,7 @@ struct MarchParams {
     float max_step = 1.7320508f * 128.0f / 128.0f;  // sqrt(3) * 2^(cascades-1) / resolution
     float cone_angle = 0.0f;
     int max_samples = 1024;
+    float t_max = INFINITY;  // samples stop here too (a surface in front of the far side of the box)
 };
 
 struct MarchSample {
@@ -102,12 +103,14 @@ NPT_HD NPT_INLINE float march_advance(const MarchParams& mp, float t, float t_ta
     return fmaxf(t, t_target);
 }
 
-// Writes up to mp.max_samples samples of `ray` (unit direction, model space) into out and returns how many.
-// jitter in [0,1) offsets the first sample by jitter * step so that training sees every depth. Samples lie in
-// occupied cells only; their dt is the step taken at them. A view with no occupancy array (occupied ==
-// nullptr) counts every cell as occupied. Non-finite input, non-positive steps or a ray that misses give 0.
-NPT_HD inline int march_ray(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
-                            float jitter, MarchSample* out) {
+// Calls visit(MarchSample) for each sample of `ray` (unit direction, model space) in order, at most
+// mp.max_samples of them, until visit returns false; returns how many were visited. jitter in [0,1) offsets the
+// first sample by jitter * step so that training sees every depth. Samples lie in occupied cells only; their dt
+// is the step taken at them. A view with no occupancy array (occupied == nullptr) counts every cell as
+// occupied. Non-finite input, non-positive steps or a ray that misses give 0.
+template <typename Visit>
+NPT_HD inline int march_ray_visit(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
+                                  float jitter, Visit&& visit) {
     if (mp.max_samples <= 0 || !isfinite(jitter) || !isfinite(mp.cone_angle)) return 0;
     if (!(mp.min_step > 0.0f) || !(mp.max_step > 0.0f) || !isfinite(mp.min_step) || !isfinite(mp.max_step))
         return 0;
@@ -115,6 +118,7 @@ NPT_HD inline int march_ray(const MarchParams& mp, const OccupancyGridView& grid
     float t_near = 0.0f;
     float t_far = 0.0f;
     if (!march_bounds(mp, ray, &t_near, &t_far)) return 0;
+    t_far = fminf(t_far, mp.t_max);
 
     // Every pass either emits a sample or leaves a cell; a straight line leaves at most 3 (R + 1) cells of
     // each cascade, so this bound is never reached in exact arithmetic: it stops a ray whose t is so large
@@ -128,7 +132,8 @@ NPT_HD inline int march_ray(const MarchParams& mp, const OccupancyGridView& grid
         const float dt = march_step(mp, t);
         const int c = march_cascade(grid, p, dt);
         if (grid.occupied == nullptr || grid.is_occupied(p, c)) {
-            out[count++] = MarchSample{p, t, dt};
+            ++count;
+            if (!visit(MarchSample{p, t, dt})) break;
             const float next = t + dt;
             if (!(next > t)) break;
             t = next;
@@ -144,6 +149,16 @@ NPT_HD inline int march_ray(const MarchParams& mp, const OccupancyGridView& grid
         }
     }
     return count;
+}
+
+// Writes up to mp.max_samples samples of `ray` into out and returns how many (march_ray_visit).
+NPT_HD inline int march_ray(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray, float jitter,
+                            MarchSample* out) {
+    int n = 0;
+    return march_ray_visit(mp, grid, ray, jitter, [&](const MarchSample& s) {
+        out[n++] = s;
+        return true;
+    });
 }
 
 }  // namespace npt::nerf

@@ -159,7 +159,9 @@ TEST(VolumeRender, BadVolumeDescriptionsAreOneLineErrors) {
     s.volumes = {cube({0, 0, 0}, 0.25f, R"({"volume": {"file": "missing.vdb"}})", f.dir)};
     test::expect_error_message([&] { SceneData d(s, 4, 4); }, {"missing.vdb"});
     s.volumes = {cube({0, 0, 0}, 0.25f, R"({"volume": {"file": "model.npt"}})", f.dir)};
-    test::expect_error_message([&] { SceneData d(s, 4, 4); }, {"model.npt", "not supported"});
+    test::expect_error_message([&] { SceneData d(s, 4, 4); }, {"node 'volume'", "model.npt"});
+    s.volumes = {cube({0, 0, 0}, 0.25f, R"({"volume": {"file": "m.npt", "crop": {"min": [0, 0]}}})", f.dir)};
+    test::expect_error_message([&] { SceneData d(s, 4, 4); }, {"node 'volume'", "crop.min", "3 numbers"});
 }
 
 }  // namespace

@@ -1,0 +1,55 @@
+// The NeRF field at one point, NPT_HD for the path tracer and the GPU: the parameter layout (density MLP
+// weights, colour MLP weights, then the hash grid: instant-ngp's snapshot order) and the per-point query.
+// Training evaluates the same maths batched (field_batch.h).
+#pragma once
+
+#include <math.h>
+
+#include <cstddef>
+
+#include "core/platform.h"
+#include "core/vec.h"
+#include "nerf/hash_encoding.h"
+#include "nerf/mlp.h"
+#include "nerf/sh_encoding.h"
+
+namespace npt::nerf {
+
+// Where each part of the parameter array starts, and the shapes that read it.
+struct NerfLayout {
+    HashGridConfig grid;  // with per_level_scale resolved for the model's aabb_scale
+    MlpShape density;     // inputs: grid.output_dims()
+    MlpShape color;       // inputs: density.outputs + 16 (SH degree 4)
+    size_t density_offset = 0, color_offset = 0, grid_offset = 0, total = 0;
+};
+
+// The density activation: exp, with the gradient clamped as instant-ngp does (exp of the clamped input).
+NPT_HD NPT_INLINE float density_activation(float raw) { return expf(fminf(raw, 15.0f)); }
+NPT_HD NPT_INLINE float density_activation_grad(float raw) { return expf(clampf(raw, -15.0f, 15.0f)); }
+NPT_HD NPT_INLINE float sigmoidf(float x) { return 1.0f / (1.0f + expf(-x)); }
+
+// The field at one point, for renderers: plain pointers, copyable to the GPU.
+struct NerfFieldView {
+    NerfLayout layout;
+    const float* params = nullptr;
+
+    // sigma (per model-space unit) at a model-space point.
+    NPT_HD float density(Vec3 p) const {
+        float enc[k_max_mlp_width], out[k_max_mlp_width];
+        hash_encode(layout.grid, params + layout.grid_offset, p, enc);
+        mlp_forward(layout.density, params + layout.density_offset, enc, out);
+        return density_activation(out[0]);
+    }
+    // sigma and colour (sigmoid outputs, the stored sRGB-encoded values) seen from unit direction d.
+    NPT_HD void query(Vec3 p, Vec3 d, float* sigma, Rgb* rgb) const {
+        float enc[k_max_mlp_width], col_in[k_max_mlp_width], out[k_max_mlp_width];
+        hash_encode(layout.grid, params + layout.grid_offset, p, enc);
+        mlp_forward(layout.density, params + layout.density_offset, enc, col_in);
+        *sigma = density_activation(col_in[0]);
+        sh_encode_deg4(d, col_in + layout.density.outputs);
+        mlp_forward(layout.color, params + layout.color_offset, col_in, out);
+        *rgb = Rgb(sigmoidf(out[0]), sigmoidf(out[1]), sigmoidf(out[2]));
+    }
+};
+
+}  // namespace npt::nerf
