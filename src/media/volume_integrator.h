@@ -11,6 +11,11 @@
 #include "core/platform.h"
 #include "core/vec.h"
 #include "media/volume.h"
+#if !defined(__CUDACC__)
+#include <vector>
+
+#include "nerf/field_batch.h"  // the CPU evaluates NeRF samples in batches
+#endif
 
 namespace npt::media {
 
@@ -160,7 +165,9 @@ NPT_HD NPT_INLINE float srgb_decode(float v) {
 // A NeRF volume over [ta, tb] of the world ray: marched in model space through its occupancy grid, each sample
 // absorbing with sigma (per model unit, integrated over the model-space step, so the node's scale does not
 // change how opaque the object looks) and emitting its colour for the ray's own direction (view-dependent),
-// decoded to linear. Samples are evaluated one at a time here (NPT_HD).
+// decoded to linear. On the GPU every sample is evaluated alone; on the CPU samples are gathered in windows
+// (16, then 32, 64...) and evaluated as one batch (field_batch.h: the MLPs as matrix products), at the price
+// of evaluating up to one window past the point where the ray turns opaque.
 NPT_HD NPT_INLINE void march_nerf(const VolumeView& v, const Ray& ray, float ta, float tb, float xi,
                                   Accumulator& acc) {
     const NerfVolumeView& n = v.nerf;
@@ -173,20 +180,56 @@ NPT_HD NPT_INLINE void march_nerf(const VolumeView& v, const Ray& ray, float ta,
     const Ray mray{om + dir * (ta * len), dir};
     nerf::MarchParams mp = n.march;
     mp.t_max = (tb - ta) * len;
+    // Every sample stands for a whole step: with the lattice offset xi uniform in [0,1) the expected number of
+    // samples in a segment of length L is L / dt, so the expected optical depth is right at both ends.
+    auto add = [&](float sigma, Rgb srgb, float dt) {
+        const Rgb c = acc.with_emission
+                          ? Rgb(srgb_decode(srgb.x), srgb_decode(srgb.y), srgb_decode(srgb.z)) * v.emission_scale
+                          : Rgb(0.0f);
+        acc.add(sigma * v.density_scale, c, dt);
+    };
+#if defined(__CUDACC__)  // both nvcc passes: the kernels are per sample
     nerf::march_ray_visit(mp, n.occupancy, mray, xi, [&](const nerf::MarchSample& s) {
         float sigma = 0.0f;
-        Rgb rgb;
-        if (acc.with_emission) {
+        Rgb rgb(0.0f);
+        if (acc.with_emission)
             n.field.query(s.position, dir, &sigma, &rgb);
-            rgb = Rgb(srgb_decode(rgb.x), srgb_decode(rgb.y), srgb_decode(rgb.z)) * v.emission_scale;
-        } else {
+        else
             sigma = n.field.density(s.position);
-        }
-        // Every sample stands for a whole step: with the lattice offset xi uniform in [0,1) the expected number
-        // of samples in a segment of length L is L / dt, so the expected optical depth is right at both ends.
-        acc.add(sigma * v.density_scale, rgb, s.dt);
+        add(sigma, rgb, s.dt);
         return !acc.done();
     });
+#else
+    struct Window {
+        nerf::FieldBatch batch;
+        std::vector<Vec3> pos, dirs;
+        std::vector<float> dt;
+    };
+    thread_local Window w;
+    w.pos.clear();
+    w.dirs.clear();
+    w.dt.clear();
+    size_t window = 16;
+    auto flush = [&] {
+        if (w.pos.empty()) return;
+        nerf::field_forward(n.field.layout, n.field.params, w.pos.data(), w.dirs.data(), w.pos.size(),
+                            acc.with_emission, w.batch);
+        for (size_t i = 0; i < w.pos.size() && !acc.done(); ++i)
+            add(w.batch.sigma[i], acc.with_emission ? w.batch.rgb[i] : Rgb(0.0f), w.dt[i]);
+        w.pos.clear();
+        w.dirs.clear();
+        w.dt.clear();
+        window = window < 128 ? 2 * window : window;
+    };
+    nerf::march_ray_visit(mp, n.occupancy, mray, xi, [&](const nerf::MarchSample& s) {
+        w.pos.push_back(s.position);
+        w.dirs.push_back(dir);
+        w.dt.push_back(s.dt);
+        if (w.pos.size() >= window) flush();
+        return !acc.done();
+    });
+    flush();
+#endif
 }
 
 // Integrates every volume the ray crosses on [t_begin, t_end]. `shadow`: transmittance only, and only volumes

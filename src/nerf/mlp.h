@@ -43,7 +43,7 @@ NPT_HD NPT_INLINE void mlp_forward(const MlpShape& s, const float* weights, cons
         for (int o = 0; o < no; ++o) {
             float acc = 0.0f;
             for (int i = 0; i < ni; ++i) acc += w[o * ni + i] * x[i];
-            y[o] = last ? acc : fmaxf(acc, 0.0f);
+            y[o] = last ? acc : (acc > 0.0f ? acc : 0.0f);  // not fmaxf: a library call on the CPU
         }
         x = y;
     }

@@ -32,18 +32,22 @@ NPT_HD NPT_INLINE float sigmoidf(float x) { return 1.0f / (1.0f + expf(-x)); }
 struct NerfFieldView {
     NerfLayout layout;
     const float* params = nullptr;
+    HashLevels levels;  // hash_levels(layout.grid), computed once rather than per lookup
+
+    NerfFieldView() = default;
+    NPT_HD NerfFieldView(const NerfLayout& l, const float* p) : layout(l), params(p), levels(hash_levels(l.grid)) {}
 
     // sigma (per model-space unit) at a model-space point.
     NPT_HD float density(Vec3 p) const {
         float enc[k_max_mlp_width], out[k_max_mlp_width];
-        hash_encode(layout.grid, params + layout.grid_offset, p, enc);
+        hash_encode(layout.grid, levels, params + layout.grid_offset, p, enc);
         mlp_forward(layout.density, params + layout.density_offset, enc, out);
         return density_activation(out[0]);
     }
     // sigma and colour (sigmoid outputs, the stored sRGB-encoded values) seen from unit direction d.
     NPT_HD void query(Vec3 p, Vec3 d, float* sigma, Rgb* rgb) const {
         float enc[k_max_mlp_width], col_in[k_max_mlp_width], out[k_max_mlp_width];
-        hash_encode(layout.grid, params + layout.grid_offset, p, enc);
+        hash_encode(layout.grid, levels, params + layout.grid_offset, p, enc);
         mlp_forward(layout.density, params + layout.density_offset, enc, col_in);
         *sigma = density_activation(col_in[0]);
         sh_encode_deg4(d, col_in + layout.density.outputs);

@@ -21,6 +21,7 @@ struct OccupancyGridView {
 
     // The smallest cascade that contains p (clamped to the last one).
     NPT_HD NPT_INLINE int cascade_of(Vec3 p) const {
+        if (cascades == 1) return 0;  // the common aabb_scale 1: no frexpf per sample
         const float m = fmaxf(fabsf(p.x - 0.5f), fmaxf(fabsf(p.y - 0.5f), fabsf(p.z - 0.5f)));
         if (!(m > 0.0f)) return 0;  // frexpf(0) gives exponent 0, which would say cascade 1 at the centre
         int exponent = 0;

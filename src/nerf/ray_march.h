@@ -63,6 +63,7 @@ NPT_HD inline bool march_bounds(const MarchParams& mp, const Ray& ray, float* t_
 // are at least dt long, so that a step cannot jump over a whole cell it did not test, or the cascade of the
 // position if that is coarser.
 NPT_HD NPT_INLINE int march_cascade(const OccupancyGridView& grid, Vec3 p, float dt) {
+    if (grid.cascades == 1) return 0;
     int exponent = 0;
     // dt * R = m 2^e with m in [0.5, 1): the cell size 2^c / R reaches dt at c = e, or at e - 1 when dt * R
     // is exactly 2^(e-1).
