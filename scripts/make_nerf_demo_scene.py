@@ -19,9 +19,9 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from make_example_scene import Builder, box, quad, rnd, sphere, sub  # noqa: E402
 
-CUBE_SCALE = 0.42          # scene units per local unit
+CUBE_SCALE = 0.55          # scene units per local unit
 LEGO_BOTTOM_LOCAL = -0.35 / 1.515
-PEDESTAL_HALF = [0.32, 0.14, 0.32]
+PEDESTAL_HALF = [0.36, 0.14, 0.36]
 PEDESTAL_AT = [-0.38, 0.0, -0.25]
 
 
@@ -54,7 +54,7 @@ def main():
         pbr("pedestal", [0.55, 0.55, 0.6], roughness=0.7),
         pbr("volume", [1.0, 1.0, 1.0]),
     ]
-    materials[3]["extensions"]["KHR_materials_emissive_strength"] = {"emissiveStrength": 20.0}
+    materials[3]["extensions"]["KHR_materials_emissive_strength"] = {"emissiveStrength": 8.0}
     mat = {m["name"]: i for i, m in enumerate(materials)}
     meshes, nodes = [], []
 
@@ -75,7 +75,7 @@ def main():
         ("left", quad([-1, 0, -1], [0, 2, 0], [0, 0, 2]), "red"),
         ("right", quad([1, 0, -1], [0, 0, 2], [0, 2, 0]), "green"),
         ("ceiling", quad([-1, 2, -1], [2, 0, 0], [0, 0, 2]), "white"),
-        ("lamp", quad([-0.25, 1.99, -0.25], [0.5, 0, 0], [0, 0, 0.5]), "lamp"),
+        ("lamp", quad([-0.4, 1.99, -0.4], [0.8, 0, 0], [0, 0, 0.8]), "lamp"),
     ]
     for name, geometry, material in room:
         to_centre = sub([0.0, 1.0, 0.0], geometry[0][0])
@@ -87,7 +87,7 @@ def main():
              {"translation": [PEDESTAL_AT[0], PEDESTAL_HALF[1], PEDESTAL_AT[2]], "scale": PEDESTAL_HALF})
     add_mesh("mirror_sphere", sphere(1.0), "mirror", {"translation": [0.42, 0.3, 0.05], "scale": [0.3, 0.3, 0.3]})
     stand_up = [-math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4)]  # -90 degrees about X
-    yaw = math.radians(35)
+    yaw = math.radians(-30)
     rotation = quat_mul([0.0, math.sin(yaw / 2), 0.0, math.cos(yaw / 2)], stand_up)
     add_mesh("lego", box(1.0), "volume",
              {"translation": [PEDESTAL_AT[0], ped_top - LEGO_BOTTOM_LOCAL * CUBE_SCALE, PEDESTAL_AT[2]],
