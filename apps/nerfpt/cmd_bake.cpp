@@ -64,7 +64,8 @@ CLI::App* add_bake_command(CLI::App& app, BakeArgs& args) {
     auto* res = cmd->add_option("--res", args.res,
                                 "Voxels along the crop's longest side, 1.." +
                                     std::to_string(bake::k_max_bake_resolution) +
-                                    "; the other sides proportional (default: 256)");
+                                    "; the other sides proportional (default: 256)")
+                   ->check(CLI::Range(1, bake::k_max_bake_resolution));
     cmd->add_option("--voxel", args.voxel, "Voxel size in model units, instead of --res")
         ->excludes(res)
         ->check(CLI::PositiveNumber);
