@@ -50,10 +50,12 @@ CLI::App* add_bake_command(CLI::App& app, BakeArgs& args) {
     CLI::App* cmd = app.add_subcommand(
         "bake", "Bake a trained model to a sparse voxel grid: OpenVDB, NanoVDB or instant-ngp raw");
     cmd->footer(
-        "The crop box fills the volume cube's local box [-1,1]^3 as in direct rendering: local x, y, z = model\n"
+        "The crop box fills the volume cube's local box [-1,1]^3 as in direct rendering: local x, y, z = "
+        "model\n"
         "z, x, y (training-world x, y, z). .vdb/.nvdb: grids 'density' (sigma per local unit) and 'color'\n"
         "(linear RGB); raw: float32 R,G,B (sRGB),sigma (per model unit). Only voxels in occupied cells with\n"
-        "sigma >= --threshold are stored (raw: written as 0). Colour is baked for one direction or averaged:\n"
+        "sigma >= --threshold are stored (raw: written as 0). Colour is baked for one direction or "
+        "averaged:\n"
         "view-dependent effects (highlights, reflections) are lost in a bake. See docs/formats.md.\n"
         "Example: nerfpt bake out/lego.npt -o out/lego.vdb --res 256");
     cmd->add_option("MODEL", args.model, "Trained model file (.npt)")->required();
@@ -65,7 +67,7 @@ CLI::App* add_bake_command(CLI::App& app, BakeArgs& args) {
                                 "Voxels along the crop's longest side, 1.." +
                                     std::to_string(bake::k_max_bake_resolution) +
                                     "; the other sides proportional (default: 256)")
-                   ->check(CLI::Range(1, bake::k_max_bake_resolution));
+                    ->check(CLI::Range(1, bake::k_max_bake_resolution));
     cmd->add_option("--voxel", args.voxel, "Voxel size in model units, instead of --res")
         ->excludes(res)
         ->check(CLI::PositiveNumber);
@@ -115,9 +117,10 @@ int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard&
         bake::check_raw_size(layout);
         out = bake::raw_output_path(out, layout);
     }
-    spdlog::info("baking {} to {}x{}x{} voxels (local x, y, z), crop ({:g}, {:g}, {:g}) .. ({:g}, {:g}, {:g})",
-                 args.model, layout.dims[0], layout.dims[1], layout.dims[2], layout.crop.min.x,
-                 layout.crop.min.y, layout.crop.min.z, layout.crop.max.x, layout.crop.max.y, layout.crop.max.z);
+    spdlog::info(
+        "baking {} to {}x{}x{} voxels (local x, y, z), crop ({:g}, {:g}, {:g}) .. ({:g}, {:g}, {:g})",
+        args.model, layout.dims[0], layout.dims[1], layout.dims[2], layout.crop.min.x, layout.crop.min.y,
+        layout.crop.min.z, layout.crop.max.x, layout.crop.max.y, layout.crop.max.z);
 
     ProgressSettings ps;
     ps.label = "bake";
@@ -125,8 +128,8 @@ int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard&
     ps.style = progress_style(stream_is_tty(stderr), global.quiet);
     Progress progress(ps, std::cerr);
     const auto t0 = std::chrono::steady_clock::now();
-    const bake::BakedGrid grid =
-        bake::bake_model(model, settings, [&](uint64_t done, uint64_t total) { progress.update(done, total); });
+    const bake::BakedGrid grid = bake::bake_model(
+        model, settings, [&](uint64_t done, uint64_t total) { progress.update(done, total); });
     progress.finish();
     const double bake_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (grid.density_voxels == 0)
@@ -137,20 +140,26 @@ int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard&
     {
         auto no_interrupt = interrupts.hold();  // a complete file, or an interrupt waits for it
         switch (format) {
-            case bake::GridFormat::vdb: bake::write_vdb(out, grid); break;
-            case bake::GridFormat::nvdb: bake::write_nvdb(out, grid); break;
-            case bake::GridFormat::raw: bake::write_raw(out, grid); break;
+            case bake::GridFormat::vdb:
+                bake::write_vdb(out, grid);
+                break;
+            case bake::GridFormat::nvdb:
+                bake::write_nvdb(out, grid);
+                break;
+            case bake::GridFormat::raw:
+                bake::write_raw(out, grid);
+                break;
         }
     }
     const double write_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     std::error_code ec;
     const auto bytes = fs::file_size(out, ec);
     fmt::print("wrote {} ({} bytes)\n", out.string(), ec ? 0 : bytes);
-    fmt::print("baked {}x{}x{} voxels: {} with density, {} colour-only (sigma threshold {:g} per model unit) "
-               "in {}, written in {}\n",
-               layout.dims[0], layout.dims[1], layout.dims[2], grid.density_voxels,
-               grid.size() - grid.density_voxels, grid.threshold, format_seconds(bake_s),
-               format_seconds(write_s));
+    fmt::print(
+        "baked {}x{}x{} voxels: {} with density, {} colour-only (sigma threshold {:g} per model unit) "
+        "in {}, written in {}\n",
+        layout.dims[0], layout.dims[1], layout.dims[2], grid.density_voxels,
+        grid.size() - grid.density_voxels, grid.threshold, format_seconds(bake_s), format_seconds(write_s));
     return 0;
 }
 

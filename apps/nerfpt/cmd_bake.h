@@ -13,11 +13,11 @@ struct BakeArgs {
     std::string model;
     std::string output;
     int res = 256;
-    float voxel = 0.0f;          // model units; 0: use res
-    std::string crop;            // "x0,y0,z0,x1,y1,z1"; empty: the model's box
-    std::string format;          // vdb | nvdb | raw; empty: from the extension
+    float voxel = 0.0f;  // model units; 0: use res
+    std::string crop;    // "x0,y0,z0,x1,y1,z1"; empty: the model's box
+    std::string format;  // vdb | nvdb | raw; empty: from the extension
     std::string direction = "avg";
-    float threshold = -1.0f;     // < 0: the default
+    float threshold = -1.0f;  // < 0: the default
     int threads = 0;
 };
 

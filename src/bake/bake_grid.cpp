@@ -177,22 +177,26 @@ BakeLayout make_bake_layout(const NerfModel& model, const BakeSettings& settings
                 throw Error("--voxel: must be a positive finite number of model units");
             n = std::max(1.0, std::round(double(side[a]) / double(settings.voxel_size)));
             if (n > k_max_bake_resolution)
-                throw Error(fmt::format("--voxel {:g}: gives {:.0f} voxels along one side, more than the {} "
-                                        "a bake supports",
-                                        settings.voxel_size, n, k_max_bake_resolution));
+                throw Error(
+                    fmt::format("--voxel {:g}: gives {:.0f} voxels along one side, more than the {} "
+                                "a bake supports",
+                                settings.voxel_size, n, k_max_bake_resolution));
         } else {
             if (settings.resolution < 1 || settings.resolution > k_max_bake_resolution)
-                throw Error(fmt::format("--res {}: must be 1..{}", settings.resolution, k_max_bake_resolution));
-            n = side[a] == longest ? double(settings.resolution)
-                                   : std::max(1.0, std::round(double(settings.resolution) * side[a] / longest));
+                throw Error(
+                    fmt::format("--res {}: must be 1..{}", settings.resolution, k_max_bake_resolution));
+            n = side[a] == longest
+                    ? double(settings.resolution)
+                    : std::max(1.0, std::round(double(settings.resolution) * side[a] / longest));
         }
         L.dims[a] = int(n);
     }
     if (L.voxel_count() > k_max_bake_voxels)
-        throw Error(fmt::format("{}: the grid would be {}x{}x{} = {} voxels, more than the {} a bake supports",
-                                settings.voxel_size > 0.0f ? fmt::format("--voxel {:g}", settings.voxel_size)
-                                                           : fmt::format("--res {}", settings.resolution),
-                                L.dims[0], L.dims[1], L.dims[2], L.voxel_count(), k_max_bake_voxels));
+        throw Error(
+            fmt::format("{}: the grid would be {}x{}x{} = {} voxels, more than the {} a bake supports",
+                        settings.voxel_size > 0.0f ? fmt::format("--voxel {:g}", settings.voxel_size)
+                                                   : fmt::format("--res {}", settings.resolution),
+                        L.dims[0], L.dims[1], L.dims[2], L.voxel_count(), k_max_bake_voxels));
     L.local_to_model = nerf::local_to_model(Vec3(k_local_min), Vec3(k_local_max), c);
     L.model_per_local = longest / (k_local_max - k_local_min);
     return L;
@@ -227,7 +231,8 @@ BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const
         const Vec3 d = nerf::world_axes_to_model(*settings.direction);
         const float len = length(d);
         if (!(len > 0.0f) || !std::isfinite(len))
-            throw Error("--direction " + vec_text(*settings.direction) + ": must be a non-zero finite vector");
+            throw Error("--direction " + vec_text(*settings.direction) +
+                        ": must be a non-zero finite vector");
         dirs.push_back(d / len);
     } else {
         dirs = average_directions();

@@ -31,14 +31,15 @@ struct BakeSettings {
     std::optional<float> threshold;     // σ per model unit; none: default_threshold(model)
 };
 
-// Voxel counts and the voxel <-> model map. Index (i, j, k) runs along the cube's LOCAL x, y, z, i.e. model z,
-// x, y (nerf_placement.h); the voxel centre is at local -1 + (index + 0.5) * 2 / dims on each axis.
+// Voxel counts and the voxel <-> model map. Index (i, j, k) runs along the cube's LOCAL x, y, z, i.e. model
+// z, x, y (nerf_placement.h); the voxel centre is at local -1 + (index + 0.5) * 2 / dims on each axis.
 struct BakeLayout {
     nerf::CropBox crop;
     int dims[3] = {1, 1, 1};  // local axes
     nerf::LocalToModel local_to_model;
-    // Model units per local unit along the crop's longest side: density in a .vdb/.nvdb is σ_model times this,
-    // i.e. σ per local unit, exact for a cubic crop in an unscaled cube (see docs/formats.md for other crops).
+    // Model units per local unit along the crop's longest side: density in a .vdb/.nvdb is σ_model times
+    // this, i.e. σ per local unit, exact for a cubic crop in an unscaled cube (see docs/formats.md for other
+    // crops).
     float model_per_local = 1.0f;
 
     uint64_t voxel_count() const { return uint64_t(dims[0]) * uint64_t(dims[1]) * uint64_t(dims[2]); }
@@ -66,7 +67,7 @@ struct BakedGrid {
     float threshold = 0.0f;
     std::vector<int32_t> coords;  // 3 per voxel: i, j, k
     std::vector<float> sigma;     // per model unit; 0 for colour-only voxels
-    std::vector<Rgb> color;       // the NeRF's sRGB-encoded values (sigmoid outputs), averaged over directions
+    std::vector<Rgb> color;  // the NeRF's sRGB-encoded values (sigmoid outputs), averaged over directions
     std::vector<uint8_t> has_density;  // 1: a density voxel; 0: colour only
     uint64_t density_voxels = 0;       // how many have has_density
 

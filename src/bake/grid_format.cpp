@@ -13,15 +13,19 @@ namespace {
 
 std::string lower_extension(const std::filesystem::path& path) {
     std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     return ext;
 }
 
 const char* extension_of(GridFormat f) {
     switch (f) {
-        case GridFormat::vdb: return ".vdb";
-        case GridFormat::nvdb: return ".nvdb";
-        case GridFormat::raw: return ".bin";
+        case GridFormat::vdb:
+            return ".vdb";
+        case GridFormat::nvdb:
+            return ".nvdb";
+        case GridFormat::raw:
+            return ".bin";
     }
     return "";
 }
@@ -60,16 +64,16 @@ std::filesystem::path raw_output_path(const std::filesystem::path& out, const Ba
     } catch (const Error&) {
         return out.parent_path() / (size + "_" + out.filename().string());  // the name has no size yet
     }
-    throw Error("--output '" + out.string() + "': the name gives a raw grid size other than the baked " + size +
-                " (drop the size from the name; it is added)");
+    throw Error("--output '" + out.string() + "': the name gives a raw grid size other than the baked " +
+                size + " (drop the size from the name; it is added)");
 }
 
 void check_raw_size(const BakeLayout& layout) {
     if (layout.voxel_count() > media::k_max_dense_voxels)
-        throw Error(fmt::format("--res: a raw grid is dense and {}x{}x{} = {} voxels is more than the {} the "
-                                "renderer loads; use a lower --res or .vdb/.nvdb",
-                                layout.dims[0], layout.dims[1], layout.dims[2], layout.voxel_count(),
-                                media::k_max_dense_voxels));
+        throw Error(fmt::format(
+            "--res: a raw grid is dense and {}x{}x{} = {} voxels is more than the {} the "
+            "renderer loads; use a lower --res or .vdb/.nvdb",
+            layout.dims[0], layout.dims[1], layout.dims[2], layout.voxel_count(), media::k_max_dense_voxels));
 }
 
 }  // namespace npt::bake

@@ -14,8 +14,8 @@ namespace npt::bake {
 // stays within one file system, so it is atomic.
 TempFile::TempFile(std::filesystem::path target) : m_target(std::move(target)) {
     std::random_device rd;
-    m_temp = m_target.parent_path() / (m_target.filename().string() + ".tmp-" + std::to_string(getpid()) + "-" +
-                                       std::to_string(rd() % 1000000));
+    m_temp = m_target.parent_path() / (m_target.filename().string() + ".tmp-" + std::to_string(getpid()) +
+                                       "-" + std::to_string(rd() % 1000000));
 }
 
 TempFile::~TempFile() {

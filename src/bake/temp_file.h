@@ -7,7 +7,7 @@
 namespace npt::bake {
 
 class TempFile {
-public:
+  public:
     explicit TempFile(std::filesystem::path target);
     ~TempFile();
     TempFile(const TempFile&) = delete;
@@ -17,7 +17,7 @@ public:
     // Renames the temporary file over the target; throws npt::Error naming the target when that fails.
     void commit();
 
-private:
+  private:
     std::filesystem::path m_target, m_temp;
     bool m_committed = false;
 };

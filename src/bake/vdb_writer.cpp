@@ -35,7 +35,8 @@ VdbGrids make_grids(const BakedGrid& grid) {
     auto xf = openvdb::math::Transform::createLinearTransform(1.0);
     const double span = double(k_local_max - k_local_min);
     xf->postScale(openvdb::Vec3d(span / L.dims[0], span / L.dims[1], span / L.dims[2]));
-    xf->postTranslate(openvdb::Vec3d(k_local_min + 0.5 * span / L.dims[0], k_local_min + 0.5 * span / L.dims[1],
+    xf->postTranslate(openvdb::Vec3d(k_local_min + 0.5 * span / L.dims[0],
+                                     k_local_min + 0.5 * span / L.dims[1],
                                      k_local_min + 0.5 * span / L.dims[2]));
     VdbGrids g;
     g.density = openvdb::FloatGrid::create(0.0f);

@@ -1,13 +1,12 @@
-// nerfpt bake: a hand-built model (random hash grid, so σ and colour vary from voxel to voxel, and an occupancy
-// grid with one known occupied box) baked to each format, read back with our readers and compared at voxel
-// centres with the per-sample NerfFieldView; sparsity, crops, the fixed-direction colour, placement on the
-// cube's local axes, and bad input through the library and the CLI.
+// nerfpt bake: a hand-built model (random hash grid, so σ and colour vary from voxel to voxel, and an
+// occupancy grid with one known occupied box) baked to each format, read back with our readers and compared
+// at voxel centres with the per-sample NerfFieldView; sparsity, crops, the fixed-direction colour, placement
+// on the cube's local axes, and bad input through the library and the CLI.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
-#include <unistd.h>
-
 #include <tbb/global_control.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -31,8 +30,8 @@ namespace {
 namespace fs = std::filesystem;
 using nerf::NerfModel;
 
-// The occupied cells of the 16^3 occupancy grid: model x in [4, 8), y in [8, 12), z in [6, 10), i.e. the model
-// box [0.25, 0.5) x [0.5, 0.75) x [0.375, 0.625).
+// The occupied cells of the 16^3 occupancy grid: model x in [4, 8), y in [8, 12), z in [6, 10), i.e. the
+// model box [0.25, 0.5) x [0.5, 0.75) x [0.375, 0.625).
 constexpr int k_occ_lo[3] = {4, 8, 6}, k_occ_hi[3] = {8, 12, 10};
 const nerf::CropBox k_occupied_box{Vec3(0.25f, 0.5f, 0.375f), Vec3(0.5f, 0.75f, 0.625f)};
 
@@ -80,9 +79,15 @@ constexpr float k_sigma_rel = 1e-4f, k_color_abs = 1e-4f;
 
 void write(GridFormat f, const fs::path& path, const BakedGrid& g) {
     switch (f) {
-        case GridFormat::vdb: write_vdb(path, g); break;
-        case GridFormat::nvdb: write_nvdb(path, g); break;
-        case GridFormat::raw: write_raw(path, g); break;
+        case GridFormat::vdb:
+            write_vdb(path, g);
+            break;
+        case GridFormat::nvdb:
+            write_nvdb(path, g);
+            break;
+        case GridFormat::raw:
+            write_raw(path, g);
+            break;
     }
 }
 
@@ -118,7 +123,8 @@ void expect_round_trip(const NerfModel& model, const BakedGrid& g, GridFormat f,
             c = average_color(view, p);
         }
         if (g.has_density[v])
-            EXPECT_NEAR(r.density[idx], sigma * scale, k_sigma_rel * sigma * scale + 1e-6f) << i << "," << j << "," << k;
+            EXPECT_NEAR(r.density[idx], sigma * scale, k_sigma_rel * sigma * scale + 1e-6f)
+                << i << "," << j << "," << k;
         else
             EXPECT_EQ(r.density[idx], 0.0f);
         test::expect_near(r.color[idx], to_linear(c), k_color_abs);
@@ -129,15 +135,19 @@ void expect_round_trip(const NerfModel& model, const BakedGrid& g, GridFormat f,
     for (int z = b; z < r.nz - b; ++z)
         for (int y = b; y < r.ny - b; ++y)
             for (int x = b; x < r.nx - b; ++x)
-                nonzero += r.density[(size_t(z) * size_t(r.ny) + size_t(y)) * size_t(r.nx) + size_t(x)] > 0.0f;
+                nonzero +=
+                    r.density[(size_t(z) * size_t(r.ny) + size_t(y)) * size_t(r.nx) + size_t(x)] > 0.0f;
     EXPECT_EQ(nonzero, g.density_voxels);
 }
 
 fs::path file_for(GridFormat f, const fs::path& dir, const BakeLayout& L) {
     switch (f) {
-        case GridFormat::vdb: return dir / "m.vdb";
-        case GridFormat::nvdb: return dir / "m.nvdb";
-        case GridFormat::raw: return raw_output_path(dir / "m.bin", L);
+        case GridFormat::vdb:
+            return dir / "m.vdb";
+        case GridFormat::nvdb:
+            return dir / "m.nvdb";
+        case GridFormat::raw:
+            return raw_output_path(dir / "m.bin", L);
     }
     return {};
 }
@@ -350,11 +360,12 @@ TEST(BakeCli, BakesAndRefusesBadInput) {
     const std::string m = (dir / "m.npt").string(), log = (dir / "log").string();
 
     ASSERT_EQ(run_cli({"bake", m, "-o", (dir / "out" / "m.vdb").string(), "--res", "16", "-q"}, log), 1);
-    ASSERT_EQ(run_cli({"bake", m, "-o", (dir / "m.vdb").string(), "--res", "16", "--threshold", "0", "-q"}, log),
-              0)
+    ASSERT_EQ(
+        run_cli({"bake", m, "-o", (dir / "m.vdb").string(), "--res", "16", "--threshold", "0", "-q"}, log), 0)
         << slurp(log);
     EXPECT_NE(slurp(log).find("64 with density"), std::string::npos) << slurp(log);
-    ASSERT_EQ(run_cli({"bake", m, "-o", (dir / "m.bin").string(), "--res", "16", "-q"}, log), 0) << slurp(log);
+    ASSERT_EQ(run_cli({"bake", m, "-o", (dir / "m.bin").string(), "--res", "16", "-q"}, log), 0)
+        << slurp(log);
     EXPECT_TRUE(fs::exists(dir / "16x16x16_m.bin"));
 
     struct Bad {
