@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <exception>
 
+#include "cmd_bake.h"
 #include "cmd_compare.h"
 #include "cmd_eval.h"
 #include "cmd_info.h"
@@ -53,6 +54,8 @@ int main(int argc, char** argv) {
     CLI::App* eval_cmd = add_eval_command(app, eval_args);
     ViewArgs view_args;
     CLI::App* view_cmd = add_view_command(app, view_args);
+    BakeArgs bake_args;
+    CLI::App* bake_cmd = add_bake_command(app, bake_args);
 
     try {
         app.parse(argc, argv);
@@ -75,6 +78,7 @@ int main(int argc, char** argv) {
         if (train_cmd->parsed()) return run_train(train_args, global, interrupts);
         if (eval_cmd->parsed()) return run_eval(eval_args, global, interrupts);
         if (view_cmd->parsed()) return run_view(view_args, global, interrupts);
+        if (bake_cmd->parsed()) return run_bake(bake_args, global, interrupts);
     } catch (const npt::Error& e) {
         print_error(e.what());
         return k_exit_error;

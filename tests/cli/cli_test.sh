@@ -33,7 +33,7 @@ expect_error() {
 # --help mentions every option of each command.
 run --help
 [[ $rc -eq 0 ]] || fail "--help: exit code $rc"
-for opt in --version --verbose --quiet render info eval view; do
+for opt in --version --verbose --quiet render info eval view bake; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt --help does not mention $opt"
 done
 run render --help
@@ -56,6 +56,13 @@ run view --help
 for opt in MODEL --output --camera --split --orbit --res --fov --elevation --distance --fps --threads ffmpeg "+Z"; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt view --help does not mention $opt"
 done
+run bake --help
+[[ $rc -eq 0 ]] || fail "bake --help: exit code $rc"
+for opt in MODEL --output --res --voxel --crop --format --direction --threshold --threads "view-dependent"; do
+    grep -q -- "$opt" "$tmp/out" || fail "nerfpt bake --help does not mention $opt"
+done
+expect_error 1 "MODEL.*does-not-exist.npt" bake "$tmp/does-not-exist.npt" -o "$tmp/x.vdb"
+expect_error 2 "--res" bake "$tmp/does-not-exist.npt" -o "$tmp/x.vdb" --res 0
 run --version
 if [[ $rc -ne 0 ]] || ! grep -qE '^nerfpt [0-9]+\.[0-9]+' "$tmp/out"; then
     fail "--version: exit code $rc, '$(cat "$tmp/out")'"

@@ -1,0 +1,295 @@
+#include "bake/bake_grid.h"
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "core/error.h"
+#include "nerf/field_batch.h"
+#include "nerf/mlp_batch.h"
+#include "nerf/sh_encoding.h"
+
+namespace npt::bake {
+namespace {
+
+using nerf::CropBox;
+using nerf::NerfModel;
+
+// Samples per field_forward call: large enough to amortise the matrix products, small enough that the colour
+// MLP's input for 16 directions (chunk * 16 rows) stays a few MB per thread.
+constexpr size_t k_chunk = 1024;
+
+std::string vec_text(Vec3 v) { return fmt::format("{:g},{:g},{:g}", v.x, v.y, v.z); }
+
+CropBox model_box(const NerfModel& model) {
+    const nerf::MarchParams mp = model.march_params();
+    return {mp.aabb_min, mp.aabb_max};
+}
+
+// The voxels of one z-slab, by index j * nx + i in increasing order.
+struct SlabDensity {
+    std::vector<uint32_t> ij;
+    std::vector<float> sigma;
+};
+struct SlabVoxels {
+    std::vector<uint32_t> ij;
+    std::vector<float> sigma;
+    std::vector<Rgb> color;
+    std::vector<uint8_t> has_density;
+};
+
+// Pass 1: σ at the centres of the slab's voxels that lie in occupied cells; keeps those >= threshold.
+void slab_density(const NerfModel& model, const BakeLayout& L, int k, float threshold, nerf::FieldBatch& b,
+                  std::vector<Vec3>& pos, std::vector<uint32_t>& cand, SlabDensity& out) {
+    const nerf::OccupancyGridView occ = model.occupancy.view();
+    const nerf::NerfLayout nl = model.layout();
+    const int nx = L.dims[0], ny = L.dims[1];
+    pos.clear();
+    cand.clear();
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const Vec3 p = L.model_center(i, j, k);
+            if (!occ.is_occupied(p, occ.cascade_of(p))) continue;
+            pos.push_back(p);
+            cand.push_back(uint32_t(j) * uint32_t(nx) + uint32_t(i));
+        }
+    for (size_t off = 0; off < pos.size(); off += k_chunk) {
+        const size_t m = std::min(k_chunk, pos.size() - off);
+        nerf::field_forward(nl, model.params.data(), pos.data() + off, nullptr, m, false, b);
+        for (size_t t = 0; t < m; ++t)
+            if (b.sigma[t] >= threshold && std::isfinite(b.sigma[t])) {
+                out.ij.push_back(cand[off + t]);
+                out.sigma.push_back(b.sigma[t]);
+            }
+    }
+}
+
+// Pass 2: the slab's density voxels and their 3x3x3 neighbours, with colour.
+void slab_color(const NerfModel& model, const BakeLayout& L, int k, const std::vector<SlabDensity>& dens,
+                const std::vector<float>& sh, size_t n_dirs, nerf::FieldBatch& b, SlabVoxels& out) {
+    const nerf::NerfLayout nl = model.layout();
+    const int nx = L.dims[0], ny = L.dims[1], nz = L.dims[2];
+    const size_t plane = size_t(nx) * size_t(ny);
+    // Union of the density voxels of slabs k-1..k+1, then dilated by one voxel along i and j.
+    std::vector<uint8_t> mask(plane, 0), tmp(plane, 0);
+    bool any = false;
+    for (int kk = std::max(0, k - 1); kk <= std::min(nz - 1, k + 1); ++kk)
+        for (uint32_t ij : dens[size_t(kk)].ij) {
+            mask[ij] = 1;
+            any = true;
+        }
+    if (!any) return;
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const size_t r = size_t(j) * size_t(nx);
+            tmp[r + size_t(i)] = mask[r + size_t(i)] | (i > 0 ? mask[r + size_t(i) - 1] : 0) |
+                                 (i + 1 < nx ? mask[r + size_t(i) + 1] : 0);
+        }
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const size_t c = size_t(j) * size_t(nx) + size_t(i);
+            mask[c] = tmp[c] | (j > 0 ? tmp[c - size_t(nx)] : 0) | (j + 1 < ny ? tmp[c + size_t(nx)] : 0);
+        }
+
+    // Merge with this slab's density voxels (both in increasing ij).
+    const SlabDensity& own = dens[size_t(k)];
+    size_t next = 0;
+    std::vector<Vec3> pos;
+    for (uint32_t ij = 0; ij < plane; ++ij) {
+        if (!mask[ij]) continue;
+        const bool has = next < own.ij.size() && own.ij[next] == ij;
+        out.ij.push_back(ij);
+        out.sigma.push_back(has ? own.sigma[next] : 0.0f);
+        out.has_density.push_back(has ? 1 : 0);
+        if (has) ++next;
+        pos.push_back(L.model_center(int(ij % uint32_t(nx)), int(ij / uint32_t(nx)), k));
+    }
+
+    // Colour: the density MLP's outputs once per voxel, then the colour MLP once per direction.
+    const int dens_out = nl.density.outputs, col_in = nl.color.inputs, co = nl.color.outputs;
+    std::vector<float> in, y;
+    out.color.resize(pos.size());
+    for (size_t off = 0; off < pos.size(); off += k_chunk) {
+        const size_t m = std::min(k_chunk, pos.size() - off);
+        nerf::field_forward(nl, model.params.data(), pos.data() + off, nullptr, m, false, b);
+        in.resize(m * n_dirs * size_t(col_in));
+        y.resize(m * n_dirs * size_t(co));
+        for (size_t t = 0; t < m; ++t)
+            for (size_t d = 0; d < n_dirs; ++d) {
+                float* row = &in[(t * n_dirs + d) * size_t(col_in)];
+                std::copy_n(&b.color_in[t * size_t(col_in)], dens_out, row);
+                std::copy_n(&sh[d * nerf::k_sh_deg4_dims], nerf::k_sh_deg4_dims, row + dens_out);
+            }
+        nerf::mlp_forward_batch(nl.color, model.params.data() + nl.color_offset, in.data(), m * n_dirs,
+                                y.data(), nullptr);
+        for (size_t t = 0; t < m; ++t) {
+            Rgb sum(0.0f);
+            for (size_t d = 0; d < n_dirs; ++d) {
+                const float* o = &y[(t * n_dirs + d) * size_t(co)];
+                sum += Rgb(nerf::sigmoidf(o[0]), nerf::sigmoidf(o[1]), nerf::sigmoidf(o[2]));
+            }
+            out.color[off + t] = sum / float(n_dirs);
+        }
+    }
+}
+
+}  // namespace
+
+Vec3 BakeLayout::local_center(int i, int j, int k) const {
+    const int idx[3] = {i, j, k};
+    Vec3 p;
+    for (int a = 0; a < 3; ++a)
+        p[a] = float(double(k_local_min) +
+                     (double(idx[a]) + 0.5) * double(k_local_max - k_local_min) / double(dims[a]));
+    return p;
+}
+
+BakeLayout make_bake_layout(const NerfModel& model, const BakeSettings& settings) {
+    const CropBox box = model_box(model);
+    BakeLayout L;
+    L.crop = settings.crop.value_or(box);
+    const CropBox& c = L.crop;
+    const std::string crop_text = "--crop " + vec_text(c.min) + "," + vec_text(c.max);
+    for (int a = 0; a < 3; ++a) {
+        if (!std::isfinite(c.min[a]) || !std::isfinite(c.max[a]))
+            throw Error(crop_text + ": every number must be finite");
+        if (!(c.min[a] < c.max[a]))
+            throw Error(crop_text + ": the minimum must be below the maximum on every axis (" +
+                        std::string(1, "xyz"[a]) + ": " + fmt::format("{:g} >= {:g}", c.min[a], c.max[a]) +
+                        ")");
+        // A little slack for a box typed with rounded numbers.
+        const float eps = 1e-5f * (box.max[a] - box.min[a]);
+        if (c.min[a] < box.min[a] - eps || c.max[a] > box.max[a] + eps)
+            throw Error(crop_text + ": must lie inside the model's box " + vec_text(box.min) + " .. " +
+                        vec_text(box.max) + " (model space, 0.5 -+ aabb_scale/2)");
+    }
+    // Crop side lengths in LOCAL axis order (local x, y, z = model z, x, y).
+    const Vec3 side = nerf::model_to_world_axes(c.max - c.min);
+    const float longest = std::max(side.x, std::max(side.y, side.z));
+    for (int a = 0; a < 3; ++a) {
+        double n = 0;
+        if (settings.voxel_size > 0.0f) {
+            if (!std::isfinite(settings.voxel_size))
+                throw Error("--voxel: must be a positive finite number of model units");
+            n = std::max(1.0, std::round(double(side[a]) / double(settings.voxel_size)));
+            if (n > k_max_bake_resolution)
+                throw Error(
+                    fmt::format("--voxel {:g}: gives {:.0f} voxels along one side, more than the {} "
+                                "a bake supports",
+                                settings.voxel_size, n, k_max_bake_resolution));
+        } else {
+            if (settings.resolution < 1 || settings.resolution > k_max_bake_resolution)
+                throw Error(
+                    fmt::format("--res {}: must be 1..{}", settings.resolution, k_max_bake_resolution));
+            n = side[a] == longest
+                    ? double(settings.resolution)
+                    : std::max(1.0, std::round(double(settings.resolution) * side[a] / longest));
+        }
+        L.dims[a] = int(n);
+    }
+    if (L.voxel_count() > k_max_bake_voxels)
+        throw Error(
+            fmt::format("{}: the grid would be {}x{}x{} = {} voxels, more than the {} a bake supports",
+                        settings.voxel_size > 0.0f ? fmt::format("--voxel {:g}", settings.voxel_size)
+                                                   : fmt::format("--res {}", settings.resolution),
+                        L.dims[0], L.dims[1], L.dims[2], L.voxel_count(), k_max_bake_voxels));
+    L.local_to_model = nerf::local_to_model(Vec3(k_local_min), Vec3(k_local_max), c);
+    L.model_per_local = longest / (k_local_max - k_local_min);
+    return L;
+}
+
+float default_threshold(const NerfModel& model) {
+    return model.config.occupancy.threshold / (8.0f * model.march_params().min_step);
+}
+
+std::vector<Vec3> average_directions() {
+    constexpr int n = 16;
+    const double golden = M_PI * (3.0 - std::sqrt(5.0));
+    std::vector<Vec3> dirs;
+    for (int i = 0; i < n; ++i) {
+        const double z = 1.0 - (2.0 * i + 1.0) / n;
+        const double r = std::sqrt(1.0 - z * z);
+        dirs.emplace_back(float(r * std::cos(golden * i)), float(r * std::sin(golden * i)), float(z));
+    }
+    return dirs;
+}
+
+BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const BakeProgress& progress) {
+    BakedGrid g;
+    g.layout = make_bake_layout(model, settings);
+    const BakeLayout& L = g.layout;
+    g.threshold = settings.threshold.value_or(default_threshold(model));
+    if (!(g.threshold >= 0.0f) || !std::isfinite(g.threshold))
+        throw Error(fmt::format("--threshold {:g}: must be a finite σ >= 0 (per model unit)", g.threshold));
+
+    std::vector<Vec3> dirs;
+    if (settings.direction) {
+        const Vec3 d = nerf::world_axes_to_model(*settings.direction);
+        const float len = length(d);
+        if (!(len > 0.0f) || !std::isfinite(len))
+            throw Error("--direction " + vec_text(*settings.direction) +
+                        ": must be a non-zero finite vector");
+        dirs.push_back(d / len);
+    } else {
+        dirs = average_directions();
+    }
+    std::vector<float> sh(dirs.size() * nerf::k_sh_deg4_dims);
+    for (size_t d = 0; d < dirs.size(); ++d) nerf::sh_encode_deg4(dirs[d], &sh[d * nerf::k_sh_deg4_dims]);
+
+    const int nz = L.dims[2];
+    const uint64_t plane = uint64_t(L.dims[0]) * uint64_t(L.dims[1]);
+    const uint64_t total = 2 * uint64_t(nz) * plane;
+    std::atomic<uint64_t> done{0};
+    auto report = [&] {
+        const uint64_t now = done.fetch_add(plane) + plane;
+        if (progress) progress(now, total);
+    };
+
+    // Slabs are independent and each writes only its own output, so the result is the same for any thread
+    // count and scheduling.
+    std::vector<SlabDensity> dens(static_cast<size_t>(nz));
+    tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& r) {
+        nerf::FieldBatch b;
+        std::vector<Vec3> pos;
+        std::vector<uint32_t> cand;
+        for (int k = r.begin(); k != r.end(); ++k) {
+            slab_density(model, L, k, g.threshold, b, pos, cand, dens[size_t(k)]);
+            report();
+        }
+    });
+    std::vector<SlabVoxels> slabs(static_cast<size_t>(nz));
+    tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& r) {
+        nerf::FieldBatch b;
+        for (int k = r.begin(); k != r.end(); ++k) {
+            slab_color(model, L, k, dens, sh, dirs.size(), b, slabs[size_t(k)]);
+            report();
+        }
+    });
+
+    size_t n = 0;
+    for (const auto& s : slabs) n += s.ij.size();
+    g.coords.reserve(3 * n);
+    g.sigma.reserve(n);
+    g.color.reserve(n);
+    g.has_density.reserve(n);
+    for (int k = 0; k < nz; ++k) {
+        SlabVoxels& s = slabs[size_t(k)];
+        for (size_t t = 0; t < s.ij.size(); ++t) {
+            g.coords.push_back(int32_t(s.ij[t] % uint32_t(L.dims[0])));
+            g.coords.push_back(int32_t(s.ij[t] / uint32_t(L.dims[0])));
+            g.coords.push_back(k);
+            g.density_voxels += s.has_density[t];
+        }
+        g.sigma.insert(g.sigma.end(), s.sigma.begin(), s.sigma.end());
+        g.color.insert(g.color.end(), s.color.begin(), s.color.end());
+        g.has_density.insert(g.has_density.end(), s.has_density.begin(), s.has_density.end());
+        s = SlabVoxels();  // free as we go: the slabs and the result together would double the peak
+    }
+    return g;
+}
+
+}  // namespace npt::bake

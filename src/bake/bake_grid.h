@@ -1,0 +1,83 @@
+// A trained NeRF sampled onto a voxel grid (nerfpt bake): σ and colour at voxel centres over a crop box,
+// sparse (only voxels the occupancy grid marks occupied and whose σ passes a threshold), laid out in the
+// volume cube's local axes exactly as nerf/nerf_placement.h maps a crop box onto the cube. The writers
+// (grid_writers.h) turn it into .vdb, .nvdb or an instant-ngp raw grid.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "core/vec.h"
+#include "nerf/nerf_model.h"
+#include "nerf/nerf_placement.h"
+
+namespace npt::bake {
+
+// The cube's local box the crop is mapped onto (an unscaled volume node's mesh, docs/formats.md).
+constexpr float k_local_min = -1.0f, k_local_max = 1.0f;
+// Largest grid (voxels, dense count) we scan; beyond this the per-slab masks and int32 coordinates are not
+// worth supporting (a 1290^3 grid, far above what the renderer's dense loader takes).
+constexpr uint64_t k_max_bake_voxels = uint64_t(1) << 31;
+// Largest --res: more would need more voxels than k_max_bake_voxels even for a flat crop.
+constexpr int k_max_bake_resolution = 65536;
+
+struct BakeSettings {
+    std::optional<nerf::CropBox> crop;  // model space; default: the model's aabb, 0.5 -+ aabb_scale / 2
+    int resolution = 256;               // voxels along the crop's longest side (when voxel_size is 0)
+    float voxel_size = 0.0f;            // model units; > 0 overrides resolution
+    std::optional<Vec3> direction;      // training-world axes; none: the average over average_directions()
+    std::optional<float> threshold;     // σ per model unit; none: default_threshold(model)
+};
+
+// Voxel counts and the voxel <-> model map. Index (i, j, k) runs along the cube's LOCAL x, y, z, i.e. model
+// z, x, y (nerf_placement.h); the voxel centre is at local -1 + (index + 0.5) * 2 / dims on each axis.
+struct BakeLayout {
+    nerf::CropBox crop;
+    int dims[3] = {1, 1, 1};  // local axes
+    nerf::LocalToModel local_to_model;
+    // Model units per local unit along the crop's longest side: density in a .vdb/.nvdb is σ_model times
+    // this, i.e. σ per local unit, exact for a cubic crop in an unscaled cube (see docs/formats.md for other
+    // crops).
+    float model_per_local = 1.0f;
+
+    uint64_t voxel_count() const { return uint64_t(dims[0]) * uint64_t(dims[1]) * uint64_t(dims[2]); }
+    Vec3 local_center(int i, int j, int k) const;
+    Vec3 model_center(int i, int j, int k) const { return local_to_model.point(local_center(i, j, k)); }
+};
+
+// Checks the settings against the model (crop inside the model's box, min < max, sizes) and computes the
+// layout. Throws npt::Error naming the option (--crop, --res, --voxel) that is wrong.
+BakeLayout make_bake_layout(const nerf::NerfModel& model, const BakeSettings& settings);
+
+// The σ below which a voxel is dropped by default: an eighth of what the occupancy grid calls occupied,
+// occupancy.threshold / (8 * min_step), so the bake keeps everything a ray march would see. 0.74 per model
+// unit with the default config.
+float default_threshold(const nerf::NerfModel& model);
+
+// The 16 directions `avg` averages the colour over: a Fibonacci sphere, model axes, unit length.
+std::vector<Vec3> average_directions();
+
+// The baked voxels, sparse, ordered by k, then j, then i. A voxel is listed when it has density (σ above the
+// threshold, in an occupied cell) or when it neighbours one (3x3x3): those carry colour with σ = 0, so that
+// trilinear interpolation at a surface's edge mixes in the right colour, not black.
+struct BakedGrid {
+    BakeLayout layout;
+    float threshold = 0.0f;
+    std::vector<int32_t> coords;  // 3 per voxel: i, j, k
+    std::vector<float> sigma;     // per model unit; 0 for colour-only voxels
+    std::vector<Rgb> color;  // the NeRF's sRGB-encoded values (sigmoid outputs), averaged over directions
+    std::vector<uint8_t> has_density;  // 1: a density voxel; 0: colour only
+    uint64_t density_voxels = 0;       // how many have has_density
+
+    size_t size() const { return sigma.size(); }
+};
+
+using BakeProgress = std::function<void(uint64_t done, uint64_t total)>;
+
+// Bakes the model. Parallel over z-slabs (TBB); the result does not depend on the thread count.
+BakedGrid bake_model(const nerf::NerfModel& model, const BakeSettings& settings,
+                     const BakeProgress& progress = {});
+
+}  // namespace npt::bake

@@ -1,0 +1,25 @@
+// A temporary sibling of an output file that is renamed over it on commit() and removed otherwise, so that
+// readers never see a half-written file and a failed write leaves nothing behind.
+#pragma once
+
+#include <filesystem>
+
+namespace npt::bake {
+
+class TempFile {
+  public:
+    explicit TempFile(std::filesystem::path target);
+    ~TempFile();
+    TempFile(const TempFile&) = delete;
+    TempFile& operator=(const TempFile&) = delete;
+
+    const std::filesystem::path& path() const { return m_temp; }
+    // Renames the temporary file over the target; throws npt::Error naming the target when that fails.
+    void commit();
+
+  private:
+    std::filesystem::path m_target, m_temp;
+    bool m_committed = false;
+};
+
+}  // namespace npt::bake

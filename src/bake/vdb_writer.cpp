@@ -1,0 +1,107 @@
+// OpenVDB and NanoVDB writers (grid_writers.h): both build the same two OpenVDB grids; NanoVDB converts them.
+#include <nanovdb/util/IO.h>
+#include <nanovdb/util/OpenToNanoVDB.h>
+#include <openvdb/openvdb.h>
+
+#include <exception>
+#include <fstream>
+#include <vector>
+
+#include "bake/grid_writers.h"
+#include "bake/temp_file.h"
+#include "core/error.h"
+#include "core/image_io.h"
+
+namespace npt::bake {
+namespace {
+
+void init_openvdb_once() {
+    static const bool initialised = [] {
+        openvdb::initialize();
+        return true;
+    }();
+    (void)initialised;
+}
+
+struct VdbGrids {
+    openvdb::FloatGrid::Ptr density;
+    openvdb::Vec3SGrid::Ptr color;
+};
+
+VdbGrids make_grids(const BakedGrid& grid) {
+    init_openvdb_once();
+    const BakeLayout& L = grid.layout;
+    // index -> local: local = -1 + (index + 0.5) * 2 / dims, per axis (the crop fills the cube, as placed).
+    auto xf = openvdb::math::Transform::createLinearTransform(1.0);
+    const double span = double(k_local_max - k_local_min);
+    xf->postScale(openvdb::Vec3d(span / L.dims[0], span / L.dims[1], span / L.dims[2]));
+    xf->postTranslate(openvdb::Vec3d(k_local_min + 0.5 * span / L.dims[0],
+                                     k_local_min + 0.5 * span / L.dims[1],
+                                     k_local_min + 0.5 * span / L.dims[2]));
+    VdbGrids g;
+    g.density = openvdb::FloatGrid::create(0.0f);
+    g.density->setName("density");
+    g.density->setGridClass(openvdb::GRID_FOG_VOLUME);
+    g.density->setTransform(xf);
+    g.color = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    g.color->setName("color");
+    g.color->setTransform(xf->copy());
+    auto dacc = g.density->getAccessor();
+    auto cacc = g.color->getAccessor();
+    for (size_t v = 0; v < grid.size(); ++v) {
+        const openvdb::Coord c(grid.coords[3 * v], grid.coords[3 * v + 1], grid.coords[3 * v + 2]);
+        if (grid.has_density[v]) dacc.setValue(c, grid.sigma[v] * L.model_per_local);
+        // Linear RGB: our readers and Blender treat a VDB colour grid as linear.
+        const Rgb s = grid.color[v];
+        cacc.setValue(c, openvdb::Vec3s(srgb_to_linear(s.x), srgb_to_linear(s.y), srgb_to_linear(s.z)));
+    }
+    g.density->insertMeta("nerfpt_sigma_scale", openvdb::FloatMetadata(L.model_per_local));
+    return g;
+}
+
+// OpenVDB and NanoVDB report failures as exceptions with multi-line texts: one line, naming the file.
+[[noreturn]] void rethrow(const std::filesystem::path& path, const std::exception& e) {
+    std::string msg = e.what();
+    for (char& c : msg)
+        if (c == '\n') c = ' ';
+    throw Error(path.string() + ": cannot write: " + msg);
+}
+
+}  // namespace
+
+void write_vdb(const std::filesystem::path& path, const BakedGrid& grid) {
+    const VdbGrids g = make_grids(grid);
+    TempFile tmp(path);
+    try {
+        openvdb::io::File file(tmp.path().string());
+        file.write(openvdb::GridCPtrVec{g.density, g.color});
+        file.close();
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        rethrow(path, e);
+    }
+    tmp.commit();
+}
+
+void write_nvdb(const std::filesystem::path& path, const BakedGrid& grid) {
+    const VdbGrids g = make_grids(grid);
+    TempFile tmp(path);
+    try {
+        std::vector<nanovdb::GridHandle<>> handles;
+        handles.push_back(nanovdb::openToNanoVDB(*g.density));
+        handles.push_back(nanovdb::openToNanoVDB(*g.color));
+        std::ofstream out(tmp.path(), std::ios::binary | std::ios::trunc);
+        if (!out) throw Error(path.string() + ": cannot write (cannot create a file in its folder)");
+        nanovdb::io::writeGrids(out, handles);
+        out.close();
+        if (!out) throw Error(path.string() + ": write failed (disk full?)");
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        rethrow(path, e);
+    }
+    tmp.commit();
+}
+
+}  // namespace npt::bake
