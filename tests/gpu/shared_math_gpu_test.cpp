@@ -10,6 +10,8 @@
 // 1e-4, and f and pdf themselves at 1e-2.
 #include <gtest/gtest.h>
 
+#include "nerf/nerf_model.h"
+
 #include <random>
 
 #include "core/sobol_sampler.h"
@@ -194,6 +196,64 @@ TEST(SharedMathGpu, VolumeIntegrationMatchesCpu) {
     }
     EXPECT_EQ(mismatches, 0);
     EXPECT_GT(crossing, 1000);  // the rays do see the medium
+}
+
+// A NeRF volume: the GPU evaluates the network one sample at a time, the CPU in batches (matrix products);
+// both must integrate the same radiance. Tolerance: float rounding of differently ordered sums through the
+// MLPs and the exponentials, 1e-3 relative as for grids.
+TEST(SharedMathGpu, NerfVolumeMatchesCpu) {
+    ASSERT_TRUE(gpu::device_available());
+    nerf::NerfConfig c;
+    c.encoding.grid.levels = 6;
+    c.encoding.grid.log2_table_size = 14;
+    c.encoding.finest_resolution = 128;
+    c.occupancy.resolution = 16;
+    nerf::NerfModel model = nerf::create_model(c, 1.0f, nerf::ngp_world_to_model(0.33f, Vec3(0.5f)));
+    std::mt19937 g(5);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    const nerf::NerfLayout layout = model.layout();
+    // Hash features large enough that density and colour vary strongly along every ray.
+    for (size_t i = layout.grid_offset; i < layout.total; ++i) model.params[i] = 4.0f * u(g) - 2.0f;
+    std::vector<float> occ(model.occupancy.cell_count());
+    for (float& o : occ) o = u(g) < 0.6f ? 1.0f : 0.0f;  // some empty cells to skip
+    model.occupancy.set_density(occ, 0.5f);
+
+    media::VolumeView v;
+    v.kind = media::VolumeKind::Nerf;
+    v.nerf.field = model.field();
+    v.nerf.occupancy = model.occupancy.view();
+    v.nerf.march = model.march_params();
+    v.nerf.local_to_model = nerf::local_to_model(Vec3(-1.0f), Vec3(1.0f), nerf::CropBox{});
+    v.density_scale = 0.3f;
+    v.world_to_local = media::affine_from(
+        (Mat4::translation(0.1, 0.2, -0.3) * Mat4::rotation_quat(0.2, 0.1, 0.3, 0.9) * Mat4::scale(0.7, 0.5, 0.6))
+            .inverse());
+    std::vector<media::VolumeView> views = {v};
+    std::vector<gpu::VolumeCase> cases;
+    for (int i = 0; i < 2000; ++i) {
+        Vec3 origin{u(g) * 4 - 2, u(g) * 4 - 2, 3.0f};
+        Vec3 target{0.1f + (u(g) - 0.5f), 0.2f + (u(g) - 0.5f), -0.3f + (u(g) - 0.5f)};
+        Ray ray{origin, normalize(target - origin)};
+        cases.push_back({ray, i % 3 == 0 ? length(target - origin) : INFINITY, u(g), i % 5 == 0});
+    }
+    std::vector<media::VolumeResult> out = gpu::run_volume_cases(views, cases);
+    ASSERT_EQ(out.size(), cases.size());
+    auto near = [](float a, float b) {
+        return std::fabs(a - b) <= 1e-3f * std::max({1e-1f, std::fabs(a), std::fabs(b)});
+    };
+    int crossing = 0, mismatches = 0;
+    for (size_t i = 0; i < cases.size(); ++i) {
+        const auto& cs = cases[i];
+        media::VolumeResult r = media::integrate_volumes({views.data(), 1}, cs.ray, 0.0f, cs.t_end, cs.xi, cs.shadow);
+        if (r.transmittance < 0.9f) ++crossing;
+        bool same = near(r.transmittance, out[i].transmittance) && near(r.radiance.x, out[i].radiance.x) &&
+                    near(r.radiance.y, out[i].radiance.y) && near(r.radiance.z, out[i].radiance.z);
+        if (!same && ++mismatches <= 5)
+            ADD_FAILURE() << "case " << i << ": cpu T " << r.transmittance << " L " << r.radiance.x
+                          << " | gpu T " << out[i].transmittance << " L " << out[i].radiance.x;
+    }
+    EXPECT_EQ(mismatches, 0);
+    EXPECT_GT(crossing, 500);
 }
 
 scene::Scene light_scene(std::vector<float>& env_rgba) {

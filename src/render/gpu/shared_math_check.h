@@ -56,7 +56,8 @@ struct VolumeCase {
     float xi;
     bool shadow;
 };
-// `volumes` point at host memory; grids and majorants are copied to the device for the run.
+// `volumes` point at host memory; grids and majorants (NeRF volumes: parameters and occupancy) are copied to
+// the device for the run.
 std::vector<media::VolumeResult> run_volume_cases(const std::vector<media::VolumeView>& volumes,
                                                   const std::vector<VolumeCase>& cases);
 

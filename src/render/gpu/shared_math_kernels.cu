@@ -192,7 +192,17 @@ std::vector<media::VolumeResult> run_volume_cases(const std::vector<media::Volum
     std::vector<DeviceBuffer<float>> densities, majorants;
     std::vector<DeviceBuffer<Vec3>> colors;
     std::vector<media::VolumeView> device_views = volumes;
+    std::vector<DeviceBuffer<uint8_t>> occupancies;
     for (media::VolumeView& v : device_views) {
+        if (v.kind == media::VolumeKind::Nerf) {
+            // The network's parameters and the occupancy bytes; everything else in the view is plain values.
+            densities.emplace_back(v.nerf.field.params, v.nerf.field.layout.total);
+            v.nerf.field.params = densities.back().data();
+            const size_t r = size_t(v.nerf.occupancy.resolution);
+            occupancies.emplace_back(v.nerf.occupancy.occupied, size_t(v.nerf.occupancy.cascades) * r * r * r);
+            v.nerf.occupancy.occupied = occupancies.back().data();
+            continue;
+        }
         size_t n = size_t(v.grid.nx) * size_t(v.grid.ny) * size_t(v.grid.nz);
         densities.emplace_back(v.grid.density, n);
         colors.emplace_back(v.grid.color, n);
