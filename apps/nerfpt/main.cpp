@@ -10,6 +10,7 @@
 
 #include "cmd_compare.h"
 #include "cmd_eval.h"
+#include "cmd_import_ngp.h"
 #include "cmd_info.h"
 #include "cmd_render.h"
 #include "cmd_train.h"
@@ -53,6 +54,8 @@ int main(int argc, char** argv) {
     CLI::App* eval_cmd = add_eval_command(app, eval_args);
     ViewArgs view_args;
     CLI::App* view_cmd = add_view_command(app, view_args);
+    ImportNgpArgs import_ngp_args;
+    CLI::App* import_ngp_cmd = add_import_ngp_command(app, import_ngp_args);
 
     try {
         app.parse(argc, argv);
@@ -75,6 +78,7 @@ int main(int argc, char** argv) {
         if (train_cmd->parsed()) return run_train(train_args, global, interrupts);
         if (eval_cmd->parsed()) return run_eval(eval_args, global, interrupts);
         if (view_cmd->parsed()) return run_view(view_args, global, interrupts);
+        if (import_ngp_cmd->parsed()) return run_import_ngp(import_ngp_args, global);
     } catch (const npt::Error& e) {
         print_error(e.what());
         return k_exit_error;
