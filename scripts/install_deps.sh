@@ -8,6 +8,7 @@ packages=(
     cmake ninja-build g++ pkg-config git
     libembree-dev libtbb-dev
     libtinygltf-dev libtinyobjloader-dev libopenexr-dev libstb-dev nlohmann-json3-dev
+    zlib1g-dev  # compressed instant-ngp snapshots (.ingp)
     libcli11-dev libspdlog-dev libfmt-dev
     libgtest-dev libgmock-dev libbenchmark-dev
     libeigen3-dev

@@ -11,6 +11,7 @@
 #include "cmd_bake.h"
 #include "cmd_compare.h"
 #include "cmd_eval.h"
+#include "cmd_import_ngp.h"
 #include "cmd_info.h"
 #include "cmd_render.h"
 #include "cmd_train.h"
@@ -56,6 +57,8 @@ int main(int argc, char** argv) {
     CLI::App* view_cmd = add_view_command(app, view_args);
     BakeArgs bake_args;
     CLI::App* bake_cmd = add_bake_command(app, bake_args);
+    ImportNgpArgs import_ngp_args;
+    CLI::App* import_ngp_cmd = add_import_ngp_command(app, import_ngp_args);
 
     try {
         app.parse(argc, argv);
@@ -79,6 +82,7 @@ int main(int argc, char** argv) {
         if (eval_cmd->parsed()) return run_eval(eval_args, global, interrupts);
         if (view_cmd->parsed()) return run_view(view_args, global, interrupts);
         if (bake_cmd->parsed()) return run_bake(bake_args, global, interrupts);
+        if (import_ngp_cmd->parsed()) return run_import_ngp(import_ngp_args, global);
     } catch (const npt::Error& e) {
         print_error(e.what());
         return k_exit_error;

@@ -33,7 +33,7 @@ expect_error() {
 # --help mentions every option of each command.
 run --help
 [[ $rc -eq 0 ]] || fail "--help: exit code $rc"
-for opt in --version --verbose --quiet render info eval view bake; do
+for opt in --version --verbose --quiet render info train eval view bake import-ngp; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt --help does not mention $opt"
 done
 run render --help
@@ -112,6 +112,10 @@ expect_error 1 "no_data" view "$tmp/bad.npt" -o "$tmp/a.png" --camera "$tmp/no_d
 expect_error 1 "one image.*\.png" view "$tmp/bad.npt" -o "$tmp/a.mp4" --camera "$tmp:0"
 expect_error 1 "even width and height" view "$tmp/bad.npt" -o "$tmp/a.mp4" --res 101x100
 expect_error 1 "bad\.npt" view "$tmp/bad.npt" -o "$tmp/a.png"
+expect_error 2 "--output.*required" import-ngp "$tmp/bad.npt"
+expect_error 1 "missing\.ingp: no such file" import-ngp "$tmp/missing.ingp" -o "$tmp/imported.npt"
+expect_error 1 "bad\.npt: not a MessagePack snapshot" import-ngp "$tmp/bad.npt" -o "$tmp/imported.npt"
+[[ ! -e "$tmp/imported.npt" ]] || fail "import-ngp wrote a model from a bad snapshot"
 # Without ffmpeg on PATH an .mp4 is refused before any work (nerfpt itself runs from its full path).
 printf '#!/bin/sh\nPATH=/nonexistent exec "%s" "$@"\n' "$nerfpt" >"$tmp/nerfpt_no_ffmpeg"
 chmod +x "$tmp/nerfpt_no_ffmpeg"
