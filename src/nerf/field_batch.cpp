@@ -18,7 +18,7 @@ void field_forward(const NerfLayout& layout, const float* params, const Vec3* po
     const float* grid = params + layout.grid_offset;
     const HashLevels levels = hash_levels(layout.grid);
     for (size_t i = 0; i < n; ++i)
-        hash_encode(layout.grid, levels, grid, positions[i], &b.encoded[i * enc_dims]);
+        hash_encode(layout.grid, levels, grid, layout.grid_position(positions[i]), &b.encoded[i * enc_dims]);
 
     // The density MLP writes its output straight into the first columns of the colour MLP's input.
     b.density_out.resize(n * dens_out);
@@ -84,7 +84,7 @@ void accumulate_grid_gradient(const NerfLayout& layout, const std::vector<const 
             for (size_t i = 0; i < b.n; ++i) {
                 const float* d_out = &b.d_encoded[i * enc_dims + level * nf];
                 HashCorner corners[8];
-                hash_level_corners(cfg, lv, level, positions[c][i], corners);
+                hash_level_corners(cfg, lv, level, layout.grid_position(positions[c][i]), corners);
                 for (int k = 0; k < 8; ++k) {
                     float* g = d_grid + size_t(corners[k].index) * nf;
                     for (int f = 0; f < nf; ++f) g[f] += corners[k].weight * d_out[f];

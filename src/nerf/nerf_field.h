@@ -21,6 +21,11 @@ struct NerfLayout {
     MlpShape density;     // inputs: grid.output_dims()
     MlpShape color;       // inputs: density.outputs + 16 (SH degree 4)
     size_t density_offset = 0, color_offset = 0, grid_offset = 0, total = 0;
+    // The hash grid covers the model's aabb (0.5 -+ aabb_scale / 2), not the unit cube: like instant-ngp, it is
+    // fed the position relative to the aabb, (p - aabb_min) / aabb_scale.
+    Vec3 aabb_min{0.0f, 0.0f, 0.0f};
+    float inv_aabb_scale = 1.0f;
+    NPT_HD NPT_INLINE Vec3 grid_position(Vec3 p) const { return (p - aabb_min) * inv_aabb_scale; }
 };
 
 // The density activation: exp, with the gradient clamped as instant-ngp does (exp of the clamped input).
@@ -40,14 +45,16 @@ struct NerfFieldView {
     // sigma (per model-space unit) at a model-space point.
     NPT_HD float density(Vec3 p) const {
         float enc[k_max_mlp_width], out[k_max_mlp_width];
-        hash_encode(layout.grid, levels, params + layout.grid_offset, p, enc);
+        out[0] = 0.0f;  // written by mlp_forward; set so that GCC cannot think it is read uninitialised
+        hash_encode(layout.grid, levels, params + layout.grid_offset, layout.grid_position(p), enc);
         mlp_forward(layout.density, params + layout.density_offset, enc, out);
         return density_activation(out[0]);
     }
     // sigma and colour (sigmoid outputs, the stored sRGB-encoded values) seen from unit direction d.
     NPT_HD void query(Vec3 p, Vec3 d, float* sigma, Rgb* rgb) const {
         float enc[k_max_mlp_width], col_in[k_max_mlp_width], out[k_max_mlp_width];
-        hash_encode(layout.grid, levels, params + layout.grid_offset, p, enc);
+        col_in[0] = out[0] = out[1] = out[2] = 0.0f;  // as in density()
+        hash_encode(layout.grid, levels, params + layout.grid_offset, layout.grid_position(p), enc);
         mlp_forward(layout.density, params + layout.density_offset, enc, col_in);
         *sigma = density_activation(col_in[0]);
         sh_encode_deg4(d, col_in + layout.density.outputs);

@@ -20,6 +20,8 @@ NerfLayout make_layout(const NerfConfig& config, float aabb_scale) {
     l.color_offset = l.density_offset + l.density.param_count();
     l.grid_offset = l.color_offset + l.color.param_count();
     l.total = l.grid_offset + l.grid.param_count();
+    l.aabb_min = Vec3(0.5f - 0.5f * aabb_scale);
+    l.inv_aabb_scale = 1.0f / aabb_scale;
     return l;
 }
 

@@ -524,12 +524,6 @@ NgpImport import_ngp_snapshot(const std::vector<uint8_t>& file_bytes, const std:
     if (aabb_scale_i == 0 && dataset)
         aabb_scale_i = f.int_or(*dataset, "snapshot.nerf.dataset", "aabb_scale", 0, 0, 1 << 20);
     if (aabb_scale_i == 0) throw f.error("snapshot.nerf.aabb_scale", "is missing");
-    if (aabb_scale_i != 1)
-        throw f.error(
-            "snapshot.nerf.aabb_scale",
-            "is " + std::to_string(aabb_scale_i) +
-                "; only 1 imports exactly: instant-ngp feeds the network positions divided by aabb_scale, "
-                "nerfpt feeds model-space positions");
     const float aabb_scale = float(aabb_scale_i);
     if (dataset) {
         if (f.bool_or(*dataset, "snapshot.nerf.dataset", "is_hdr", false))

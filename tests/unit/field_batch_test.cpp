@@ -78,6 +78,20 @@ TEST(FieldBatch, ForwardMatchesPerSampleView) {
     }
 }
 
+TEST(FieldBatch, GridCoversTheWholeAabbForLargerScenes) {
+    // aabb_scale 4: the field lives in 0.5 -+ 2; the grid must see positions relative to that box (as
+    // instant-ngp), not clamp them to the unit cube, so points outside [0,1]^3 still differ.
+    NerfModel m = create_model(tiny_config(), 4.0f, ngp_world_to_model(0.33f, Vec3(0.5f)));
+    const NerfLayout l = m.layout();
+    Pcg32 rng(3, 4);
+    for (size_t i = l.grid_offset; i < l.total; ++i) m.params[i] = 2.0f * rng.next_float() - 1.0f;
+    const NerfFieldView f = m.field();
+    EXPECT_NE(f.density(Vec3(-0.9f, 0.5f, 0.5f)), f.density(Vec3(-1.3f, 0.5f, 0.5f)));
+    EXPECT_NE(f.density(Vec3(2.2f, 2.1f, -1.2f)), f.density(Vec3(2.4f, 2.1f, -1.2f)));
+    EXPECT_EQ(l.grid_position(Vec3(-1.5f)).x, 0.0f);
+    EXPECT_EQ(l.grid_position(Vec3(2.5f)).x, 1.0f);
+}
+
 TEST(FieldBatch, BackwardThroughCompositingMatchesFiniteDifferences) {
     NerfModel m = random_model();
     const NerfLayout layout = m.layout();

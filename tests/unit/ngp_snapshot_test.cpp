@@ -653,7 +653,6 @@ TEST(NgpSnapshot, UnsupportedConfigs) {
              f["dir_encoding"] = Mp(MpMap{{"otype", "SphericalHarmonics"}, {"degree", 3}});
          },
          "dir_encoding.degree"},
-        {[](Mp& f) { f["snapshot"]["nerf"]["aabb_scale"] = 16; }, "snapshot.nerf.aabb_scale"},
         {[](Mp& f) { f["snapshot"]["nerf"]["dataset"]["is_hdr"] = true; }, "snapshot.nerf.dataset.is_hdr"},
         {[](Mp& f) { f["snapshot"]["mode"] = "Sdf"; }, "snapshot.mode"},
         {[](Mp& f) { f["snapshot"]["params_type"] = "double"; }, "snapshot.params_type"},
