@@ -8,7 +8,10 @@ with local axes = the training world's axes. lego's world is Z-up, so the cube i
 (local +Z -> scene +Y) and yawed to show the model at an angle. With no crop the cube spans lego's whole
 aabb (world +-0.5/0.33 = +-1.515); lego's lowest point is at world z ~ -0.35, i.e. local z = -0.35/1.515.
 
-Usage: python3 scripts/make_nerf_demo_scene.py [OUT.gltf]
+Usage: python3 scripts/make_nerf_demo_scene.py [OUT.gltf [VOLUME_FILE]]
+VOLUME_FILE (default lego.npt, relative to OUT's folder) may also be a grid baked with `nerfpt bake`: grid
+densities are per world unit, so the scene then sets density_scale = 1 / CUBE_SCALE to keep the baked object
+as opaque as the model queried directly (whose sigma is per model unit, independent of the node's scale).
 """
 import base64
 import json
@@ -34,7 +37,11 @@ def quat_mul(a, b):
 
 def main():
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "scenes", "nerf_demo", "scene.gltf")
+    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "out", "nerf_demo", "scene.gltf")
+    volume_file = sys.argv[2] if len(sys.argv) > 2 else "lego.npt"
+    volume = {"file": volume_file}
+    if not volume_file.endswith(".npt"):
+        volume["density_scale"] = round(1.0 / CUBE_SCALE, 6)
     b = Builder()
 
     def pbr(name, color, metallic=0.0, roughness=1.0, **extra):
@@ -92,7 +99,7 @@ def main():
     add_mesh("lego", box(1.0), "volume",
              {"translation": [PEDESTAL_AT[0], ped_top - LEGO_BOTTOM_LOCAL * CUBE_SCALE, PEDESTAL_AT[2]],
               "rotation": rnd(rotation), "scale": [CUBE_SCALE] * 3,
-              "extras": {"volume": {"file": "lego.npt"}}})
+              "extras": {"volume": volume}})
     nodes.append({"name": "camera", "translation": [0.0, 1.0, 3.9], "camera": 0})
 
     gltf = {
