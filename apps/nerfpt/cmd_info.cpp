@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
+#include "nerf/model_file.h"
 #include "scene/scene.h"
 
 namespace npt::cli {
@@ -165,16 +167,85 @@ void print_volumes(const Scene& s) {
 
 CLI::App* add_info_command(CLI::App& app, InfoArgs& args) {
     CLI::App* cmd =
-        app.add_subcommand("info", "Print what a scene holds: meshes, materials, lights, camera, volumes");
-    cmd->footer("Example: nerfpt info scenes/example/scene.gltf");
-    cmd->add_option("SCENE", args.scene, "Scene file: .gltf, .glb, .obj or .json (docs/formats.md)")
+        app.add_subcommand("info", "Print what a scene or a model file holds");
+    cmd->footer(
+        "For a scene: meshes, materials, lights, camera, volumes. For a model (.npt): its config, training\n"
+        "progress, occupancy and where its content lies in model space and in the training world (useful to\n"
+        "place it in a volume cube, docs/formats.md).\n"
+        "Examples: nerfpt info scenes/example/scene.gltf\n"
+        "          nerfpt info lego.npt");
+    cmd->add_option("SCENE", args.scene, "Scene file (.gltf, .glb, .obj, .json) or model file (.npt)")
         ->required();
     cmd->add_option("--camera", args.camera,
                     "Camera to describe, by glTF node or camera name (default: the first)");
     return cmd;
 }
 
+namespace {
+
+// A model file: what it is, how far it was trained, and where its content lies (to place it in a scene).
+int print_model_info(const std::string& path) {
+    const nerf::NerfModel m = nerf::load_model(path);
+    const nerf::NerfLayout l = m.layout();
+    const auto& g = l.grid;
+    fmt::print("model      {}\n", path);
+    fmt::print("field      hash grid {} levels x {} features, 2^{} entries, base {}, finest {:.0f}; density MLP "
+               "{}x{} -> {}, colour MLP {}x{} -> 3; {} parameters\n",
+               g.levels, g.features_per_level, g.log2_table_size, g.base_resolution,
+               m.config.encoding.finest_resolution * m.aabb_scale, m.config.density_mlp.hidden_layers,
+               m.config.density_mlp.width, m.config.density_mlp.outputs, m.config.color_mlp.hidden_layers,
+               m.config.color_mlp.width, l.total);
+    if (m.training)
+        fmt::print("training   {} steps, {:.0f} s; optimizer state included (can --resume)\n",
+                   m.training->adam.step, m.training->elapsed_seconds);
+    else
+        fmt::print("training   no training state (render/evaluate only)\n");
+    fmt::print("occupancy  {} cascade(s) of {}^3, {:.1f}% occupied\n", m.occupancy.cascades(),
+               m.occupancy.resolution(), 100.0 * m.occupancy.occupied_fraction());
+    // Where the content is: the occupied cells of the finest cascade that has any, in model space and in the
+    // training world (the transforms.json cameras' space).
+    const nerf::OccupancyGridView v = m.occupancy.view();
+    const int r = v.resolution;
+    // Per axis, the 1st and 99th percentile of the occupied cells' centres: a few floaters near the box's faces
+    // (common where few cameras look) would otherwise make the bounds the whole box.
+    std::vector<float> coords[3];
+    for (int c = 0; c < v.cascades && coords[0].empty(); ++c) {
+        const float size = v.cascade_size(c), cell = size / float(r), base = 0.5f - 0.5f * size;
+        for (int z = 0; z < r; ++z)
+            for (int y = 0; y < r; ++y)
+                for (int x = 0; x < r; ++x)
+                    if (v.occupied[size_t(c) * r * r * r + x + size_t(y) * r + size_t(z) * r * r]) {
+                        coords[0].push_back(base + (x + 0.5f) * cell);
+                        coords[1].push_back(base + (y + 0.5f) * cell);
+                        coords[2].push_back(base + (z + 0.5f) * cell);
+                    }
+    }
+    Vec3 lo(INFINITY), hi(-INFINITY);
+    for (int a = 0; a < 3 && !coords[a].empty(); ++a) {
+        auto& q = coords[a];
+        std::sort(q.begin(), q.end());
+        lo[a] = q[size_t(0.01 * double(q.size() - 1))];
+        hi[a] = q[size_t(0.99 * double(q.size() - 1))];
+    }
+    fmt::print("aabb       model space 0.5 +- {} (aabb_scale {})\n", 0.5f * m.aabb_scale, m.aabb_scale);
+    if (lo.x <= hi.x) {
+        const Mat4 to_world = m.world_to_model.inverse();
+        const Vec3 a = to_world.transform_point(lo), b = to_world.transform_point(hi);
+        fmt::print("content    per axis, 98% of the occupied cells lie in model {} .. {}, training world {} .. {}\n", vec(lo),
+                   vec(hi),
+                   vec(vmin(a, b)), vec(vmax(a, b)));
+    } else {
+        fmt::print("content    no occupied cells\n");
+    }
+    return 0;
+}
+
+}  // namespace
+
 int run_info(const InfoArgs& args, const GlobalSettings& /*global*/) {
+    std::string ext = std::filesystem::path(args.scene).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
+    if (ext == ".npt") return print_model_info(args.scene);
     scene::LoadOptions load;
     load.camera_name = args.camera;
     const Scene s = scene::load_scene(args.scene, load);

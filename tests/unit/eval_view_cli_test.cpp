@@ -85,6 +85,44 @@ class EvalViewCli : public ::testing::Test {
     fs::path m_dir;
 };
 
+TEST_F(EvalViewCli, InfoDescribesAModel) {
+    ASSERT_EQ(run_cli({"info", (dir() / "m.npt").string()}, dir() / "info.log"), 0) << slurp(dir() / "info.log");
+    std::string out = slurp(dir() / "info.log");
+    EXPECT_NE(out.find("hash grid 4 levels x 2 features, 2^12 entries"), std::string::npos) << out;
+    EXPECT_NE(out.find("training   100 steps"), std::string::npos) << out;
+
+    // Content bounds, from a model whose occupancy is one known block: model cells 4..7 of 16 along x
+    // (0.25..0.5), 8..11 along y and z (0.5..0.75). Model x, y, z = world y, z, x (times 0.33, + 0.5), so the
+    // block's cell centres span world x (z) 0.0947..0.6629, y (x) -0.6629..-0.0947, z (y) 0.0947..0.6629.
+    nerf::NerfConfig c;
+    c.encoding.grid.levels = 2;
+    c.encoding.grid.log2_table_size = 10;
+    c.occupancy.resolution = 16;
+    nerf::NerfModel m = nerf::create_model(c, 1.0f, nerf::ngp_world_to_model(0.33f, Vec3(0.5f)));
+    std::vector<float> d(16 * 16 * 16, 0.0f);
+    for (int z = 8; z < 12; ++z)
+        for (int y = 8; y < 12; ++y)
+            for (int x = 4; x < 8; ++x) d[x + y * 16 + z * 256] = 1.0f;
+    m.occupancy.set_density(d, c.occupancy.threshold);
+    m.training.reset();
+    nerf::save_model(dir() / "block.npt", m, false);
+    ASSERT_EQ(run_cli({"info", (dir() / "block.npt").string()}, dir() / "info2.log"), 0);
+    out = slurp(dir() / "info2.log");
+    const size_t at = out.find("training world (");
+    ASSERT_NE(at, std::string::npos) << out;
+    float lo[3], hi[3];
+    ASSERT_EQ(std::sscanf(out.c_str() + at, "training world (%f, %f, %f) .. (%f, %f, %f)", &lo[0], &lo[1], &lo[2],
+                          &hi[0], &hi[1], &hi[2]),
+              6)
+        << out;
+    const float expect_lo[3] = {0.0947f, -0.6629f, 0.0947f}, expect_hi[3] = {0.6629f, -0.0947f, 0.6629f};
+    for (int a = 0; a < 3; ++a) {
+        EXPECT_NEAR(lo[a], expect_lo[a], 2e-3f) << out;  // printed with 3 significant digits
+        EXPECT_NEAR(hi[a], expect_hi[a], 2e-3f) << out;
+    }
+    EXPECT_NE(out.find("no training state"), std::string::npos) << out;
+}
+
 TEST_F(EvalViewCli, EvalNumbersAndFiles) {
     const fs::path out = dir() / "eval";  // created by eval
     ASSERT_EQ(run_cli({"eval", (dir() / "m.npt").string(), test_json().string(), "-o", out.string(), "-q"},
