@@ -277,6 +277,45 @@ TEST(Curate, WholeStageOnATinyVideo) {
     }
 }
 
+TEST(Curate, PhoneRotationMetadataGivesUprightFrames) {
+    if (!have_ffmpeg()) GTEST_SKIP() << "ffmpeg/ffprobe not on PATH: the rotation test needs them";
+    const std::filesystem::path dir = test::temp_dir();
+    const std::filesystem::path plain = dir / "plain.mp4", rotated = dir / "rotated.mp4";
+    const std::string make =
+        "ffmpeg -nostdin -v error -y -f lavfi -i testsrc=size=64x48:rate=10 -t 1 -pix_fmt yuv420p " +
+        shell_quote(plain.string()) + " && ffmpeg -nostdin -v error -y -i " + shell_quote(plain.string()) +
+        " -c copy -metadata:s:v:0 rotate=90 " + shell_quote(rotated.string());
+    ASSERT_EQ(std::system(make.c_str()), 0);
+    // A phone stores landscape sensor frames plus a quarter-turn; ffmpeg autorotates, so the frames are
+    // 48x64.
+    const VideoInfo info = probe_video(rotated);
+    EXPECT_EQ(info.width, 48);
+    EXPECT_EQ(info.height, 64);
+    FrameReader reader(rotated, info, 1, 3);
+    Frame8 f;
+    int n = 0;
+    while (reader.next(f)) ++n;  // a size mismatch would be a truncated-frame error
+    EXPECT_EQ(n, 3);
+}
+
+// Restores $PATH however the test ends.
+struct PathGuard {
+    std::string saved;
+    explicit PathGuard(const std::filesystem::path& replacement) {
+        const char* old = std::getenv("PATH");
+        saved = old ? old : "";
+        ::setenv("PATH", replacement.c_str(), 1);
+    }
+    ~PathGuard() { ::setenv("PATH", saved.c_str(), 1); }
+};
+
+TEST(Curate, MissingFfmpegIsAOneLineError) {
+    const std::filesystem::path dir = test::temp_dir();
+    test::write_file(dir / "clip.mp4", "x");
+    const PathGuard guard(dir);  // a folder with no ffmpeg in it
+    test::expect_error_message([&] { probe_video(dir / "clip.mp4"); }, {"clip.mp4", "ffmpeg", "PATH"});
+}
+
 TEST(Curate, NotAVideoAndMissingFileAreOneLineErrors) {
     if (!have_ffmpeg()) GTEST_SKIP() << "ffmpeg/ffprobe not on PATH: needed to probe the file";
     const std::filesystem::path dir = test::temp_dir();
