@@ -132,9 +132,9 @@ FrameReader::FrameReader(const std::filesystem::path& video, const VideoInfo& in
                          int64_t max_frames)
     : m_video(video), m_log(temp_log_path("ffmpeg")), m_info(info), m_step(std::max<int64_t>(1, step)) {
     // select keeps source frames n = 0, step, 2 step, ...; passthrough stops ffmpeg from duplicating
-    // frames to restore the original rate.
+    // frames to restore the original rate (-vsync rather than -fps_mode: ffmpeg 4.x has only -vsync).
     const std::string filter = m_step > 1
-                                   ? fmt::format("-vf {} -fps_mode passthrough ",
+                                   ? fmt::format("-vf {} -vsync passthrough ",
                                                  shell_quote(fmt::format("select=not(mod(n\\,{}))", m_step)))
                                    : std::string();
     const std::string command =
