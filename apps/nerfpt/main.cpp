@@ -10,6 +10,7 @@
 
 #include "cmd_bake.h"
 #include "cmd_compare.h"
+#include "cmd_curate.h"
 #include "cmd_eval.h"
 #include "cmd_import_ngp.h"
 #include "cmd_info.h"
@@ -59,6 +60,8 @@ int main(int argc, char** argv) {
     CLI::App* bake_cmd = add_bake_command(app, bake_args);
     ImportNgpArgs import_ngp_args;
     CLI::App* import_ngp_cmd = add_import_ngp_command(app, import_ngp_args);
+    CurateArgs curate_args;
+    CLI::App* curate_cmd = add_curate_command(app, curate_args);
 
     try {
         app.parse(argc, argv);
@@ -83,6 +86,7 @@ int main(int argc, char** argv) {
         if (view_cmd->parsed()) return run_view(view_args, global, interrupts);
         if (bake_cmd->parsed()) return run_bake(bake_args, global, interrupts);
         if (import_ngp_cmd->parsed()) return run_import_ngp(import_ngp_args, global);
+        if (curate_cmd->parsed()) return run_curate(curate_args, global);
     } catch (const npt::Error& e) {
         print_error(e.what());
         return k_exit_error;
