@@ -14,6 +14,7 @@
 #include "cmd_eval.h"
 #include "cmd_import_ngp.h"
 #include "cmd_info.h"
+#include "cmd_poses.h"
 #include "cmd_render.h"
 #include "cmd_train.h"
 #include "cmd_view.h"
@@ -62,6 +63,8 @@ int main(int argc, char** argv) {
     CLI::App* import_ngp_cmd = add_import_ngp_command(app, import_ngp_args);
     CurateArgs curate_args;
     CLI::App* curate_cmd = add_curate_command(app, curate_args);
+    PosesArgs poses_args;
+    CLI::App* poses_cmd = add_poses_command(app, poses_args);
 
     try {
         app.parse(argc, argv);
@@ -87,6 +90,7 @@ int main(int argc, char** argv) {
         if (bake_cmd->parsed()) return run_bake(bake_args, global, interrupts);
         if (import_ngp_cmd->parsed()) return run_import_ngp(import_ngp_args, global);
         if (curate_cmd->parsed()) return run_curate(curate_args, global);
+        if (poses_cmd->parsed()) return run_poses(poses_args, global, interrupts);
     } catch (const npt::Error& e) {
         print_error(e.what());
         return k_exit_error;

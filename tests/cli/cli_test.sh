@@ -138,6 +138,22 @@ for word in meshes materials lights spot camera volumes nerf_volume render; do
     grep -q "$word" "$tmp/out" || fail "info does not mention '$word'"
 done
 
+# poses: bad folders, too few frames, COLMAP missing (PATH without it), a bad matcher.
+expect_error 1 "not a folder of frames" poses "$tmp/no_such_frames" -o "$tmp/transforms.json"
+mkdir -p "$tmp/frames"
+cp "$here/../../docs/images/cornell_256spp.png" "$tmp/frames/a.png"
+expect_error 1 "1 images .* at least 3" poses "$tmp/frames" -o "$tmp/transforms.json"
+cp "$tmp/frames/a.png" "$tmp/frames/b.png"
+cp "$tmp/frames/a.png" "$tmp/frames/c.png"
+cp "$tmp/frames/a.png" "$tmp/frames/contact_sheet.png"  # curate's sheet: not a frame
+mkdir -p "$tmp/emptybin"
+rc=0
+PATH="$tmp/emptybin" "$nerfpt" poses "$tmp/frames" -o "$tmp/transforms.json" >"$tmp/out" 2>"$tmp/err" || rc=$?
+[[ $rc -eq 1 ]] || fail "poses without colmap: exit code $rc"
+grep -q "'colmap' not found on PATH: install COLMAP" "$tmp/err" || fail "poses without colmap: $(cat "$tmp/err")"
+[[ ! -e "$tmp/transforms.json" ]] || fail "poses without colmap wrote transforms.json"
+expect_error 2 "matcher" poses "$tmp/frames" -o "$tmp/transforms.json" --matcher fancy
+
 if [[ $failures -gt 0 ]]; then
     echo "$failures check(s) failed"
     exit 1

@@ -1,0 +1,24 @@
+// `nerfpt poses`: camera poses for a folder of frames with COLMAP, written as an instant-ngp transforms.json.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "common.h"
+
+namespace npt::cli {
+
+struct PosesArgs {
+    std::string frames;
+    std::string output;
+    std::string work;  // empty: <output folder>/colmap
+    std::string matcher = "sequential";
+    int aabb_scale = 16;
+    int max_image_size = 1600;
+    double min_registered = 0.5;
+};
+
+CLI::App* add_poses_command(CLI::App& app, PosesArgs& args);
+int run_poses(const PosesArgs& args, const GlobalSettings& global, InterruptGuard& interrupts);
+
+}  // namespace npt::cli
