@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <initializer_list>
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 #include "core/vec.h"
@@ -20,6 +21,20 @@ std::filesystem::path test_data();
 std::filesystem::path temp_dir();
 // Writes `content` to `path` (binary), creating parent folders.
 void write_file(const std::filesystem::path& path, const std::string& content);
+
+// The nerfpt binary of this build (tests that run it skip when it is not built).
+std::filesystem::path cli_binary();
+// The whole file as text ("" when it cannot be read).
+std::string read_text(const std::filesystem::path& path);
+// Starts the nerfpt binary with `args` (not including the binary), stdout and stderr into `log`, PATH replaced
+// by `path_env` when it is not empty.
+int spawn_cli(const std::vector<std::string>& args, const std::filesystem::path& log,
+              const std::string& path_env = "");
+// Waits for a spawned process: its exit code, or 128 + the signal that killed it.
+int wait_exit(int pid);
+// spawn_cli + wait_exit.
+int run_cli(const std::vector<std::string>& args, const std::filesystem::path& log,
+            const std::string& path_env = "");
 
 // Runs `fn` and expects an npt::Error whose message is one line and contains every one of `parts` (the file,
 // the field...): the project's rule for errors a user sees.

@@ -19,6 +19,7 @@
 #include "core/image_metrics.h"
 #include "core/progress.h"
 #include "input_checks.h"
+#include "dataset_loading.h"
 #include "interrupt.h"
 #include "nerf/dataset.h"
 #include "nerf/eval_images.h"
@@ -111,18 +112,7 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     const auto t_start = std::chrono::steady_clock::now();
     const nerf::NerfModel model = nerf::load_model(args.model);
     const bool tty = stream_is_tty(stderr);
-    nerf::Dataset data;
-    {
-        ProgressSettings ps;
-        ps.label = "load";
-        ps.unit = "images";
-        ps.style = progress_style(tty, global.quiet);
-        Progress progress(ps, std::cerr);
-        data = nerf::load_dataset(args.data, args.split,
-                                  [&](size_t done, size_t total) { progress.update(done, total); });
-        progress.finish();
-    }
-    nerf::downscale_dataset(data, args.downscale);
+    nerf::Dataset data = load_dataset_with_progress(args.data, args.split, args.downscale, global.quiet);
 
     std::vector<size_t> views;
     for (size_t i = 0; i < data.cameras.size(); i += size_t(args.every)) views.push_back(i);

@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "core/progress.h"
+#include "dataset_loading.h"
 #include "interrupt.h"
 #include "nerf/dataset.h"
 #include "nerf/model_file.h"
@@ -129,18 +130,7 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
             throw Error("--resume: '" + out.string() + "' was saved without its training state");
     }
     const bool tty = stream_is_tty(stderr);
-    nerf::Dataset data;
-    {
-        ProgressSettings ps;
-        ps.label = "load";
-        ps.unit = "images";
-        ps.style = progress_style(tty, global.quiet);
-        Progress progress(ps, std::cerr);
-        data = nerf::load_dataset(args.data, args.split,
-                                  [&](size_t done, size_t total) { progress.update(done, total); });
-        progress.finish();
-    }
-    nerf::downscale_dataset(data, args.downscale);
+    nerf::Dataset data = load_dataset_with_progress(args.data, args.split, args.downscale, global.quiet);
     if (!args.resume) {
         const nerf::NerfConfig config = args.config.empty() ? nerf::NerfConfig{} : nerf::load_config(args.config);
         model = nerf::create_model(config, data.aabb_scale, nerf::ngp_world_to_model(data.scale, data.offset));

@@ -22,16 +22,6 @@
 namespace npt {
 namespace fs = std::filesystem;
 
-float srgb_to_linear(float v) {
-    if (v <= 0.04045f) return v / 12.92f;
-    return std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
-
-float linear_to_srgb(float v) {
-    if (v <= 0.0031308f) return v * 12.92f;
-    return 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
-}
-
 namespace {
 
 void check_size(int w, int h, const std::string& name) {

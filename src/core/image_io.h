@@ -7,14 +7,12 @@
 #include <string>
 
 #include "core/image.h"
+#include "core/srgb.h"
 
 namespace npt {
 
 // Largest accepted width or height; checked before any pixel memory is allocated.
 constexpr int k_max_image_side = 32768;
-
-float srgb_to_linear(float v);
-float linear_to_srgb(float v);
 
 // Reads an image file into 3 (RGB) or 4 (RGBA) float channels. 8/16-bit formats are decoded through the sRGB
 // EOTF when `srgb` is true (colour images), or scaled to [0, 1] as they are when false (data such as normal

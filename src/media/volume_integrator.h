@@ -9,6 +9,7 @@
 #pragma once
 
 #include "core/platform.h"
+#include "core/srgb.h"
 #include "core/vec.h"
 #include "media/volume.h"
 #if !defined(__CUDACC__)
@@ -156,12 +157,6 @@ NPT_HD NPT_INLINE void march_overlapping(const VolumeOnRay* rs, const int* activ
     }
 }
 
-// sRGB-encoded value -> linear (NeRFs predict the stored image values); NPT_HD twin of core/image_io.h's.
-NPT_HD NPT_INLINE float srgb_decode(float v) {
-    v = fminf(fmaxf(v, 0.0f), 1.0f);
-    return v <= 0.04045f ? v * (1.0f / 12.92f) : powf((v + 0.055f) * (1.0f / 1.055f), 2.4f);
-}
-
 // A NeRF volume over [ta, tb] of the world ray: marched in model space through its occupancy grid, each sample
 // absorbing with sigma (per model unit, integrated over the model-space step, so the node's scale does not
 // change how opaque the object looks) and emitting its colour for the ray's own direction (view-dependent),
@@ -184,7 +179,7 @@ NPT_HD NPT_INLINE void march_nerf(const VolumeView& v, const Ray& ray, float ta,
     // samples in a segment of length L is L / dt, so the expected optical depth is right at both ends.
     auto add = [&](float sigma, Rgb srgb, float dt) {
         const Rgb c = acc.with_emission
-                          ? Rgb(srgb_decode(srgb.x), srgb_decode(srgb.y), srgb_decode(srgb.z)) * v.emission_scale
+                          ? Rgb(srgb_to_linear(srgb.x), srgb_to_linear(srgb.y), srgb_to_linear(srgb.z)) * v.emission_scale
                           : Rgb(0.0f);
         acc.add(sigma * v.density_scale, c, dt);
     };

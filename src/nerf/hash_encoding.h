@@ -115,7 +115,8 @@ NPT_HD NPT_INLINE void hash_level_corners(const HashGridConfig& cfg, int level, 
     hash_level_corners(cfg, hash_level(cfg, level), level, p, out);
 }
 
-// hash_encode with the levels precomputed: the batched CPU path.
+// out[l * F + f] = sum over the 8 corners of level l of weight * params[index * F + f], with the levels
+// precomputed (hash_levels) as batched and per-sample callers do.
 NPT_HD NPT_INLINE void hash_encode(const HashGridConfig& cfg, const HashLevels& levels, const float* params,
                                    Vec3 p, float* out) {
     const int nf = cfg.features_per_level;
@@ -130,18 +131,9 @@ NPT_HD NPT_INLINE void hash_encode(const HashGridConfig& cfg, const HashLevels& 
     }
 }
 
-// out[l * F + f] = sum over the 8 corners of level l of weight * params[index * F + f].
+// The same, computing the levels on the way (tests, one-off lookups).
 NPT_HD NPT_INLINE void hash_encode(const HashGridConfig& cfg, const float* params, Vec3 p, float* out) {
-    const int nf = cfg.features_per_level;
-    for (int l = 0; l < cfg.levels; ++l) {
-        HashCorner corners[8];
-        hash_level_corners(cfg, l, p, corners);
-        for (int f = 0; f < nf; ++f) {
-            float acc = 0.0f;
-            for (int c = 0; c < 8; ++c) acc += corners[c].weight * params[size_t(corners[c].index) * nf + f];
-            out[l * nf + f] = acc;
-        }
-    }
+    hash_encode(cfg, hash_levels(cfg), params, p, out);
 }
 
 // d_params[index * F + f] += weight * d_out[l * F + f]: the encoding is linear in the parameters, so this is

@@ -328,30 +328,9 @@ TEST(Bake, UnwritableOutputLeavesNothing) {
 
 // --- the command line -------------------------------------------------------------------------------------
 
-fs::path cli() { return fs::path(NERFPT_BINARY_DIR) / "nerfpt"; }
-
-int run_cli(std::vector<std::string> args, const fs::path& log) {
-    args.insert(args.begin(), cli().string());
-    const pid_t pid = fork();
-    if (pid == 0) {
-        std::vector<char*> argv;
-        for (auto& a : args) argv.push_back(a.data());
-        argv.push_back(nullptr);
-        const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        dup2(fd, 1);
-        dup2(fd, 2);
-        execv(argv[0], argv.data());
-        _exit(127);
-    }
-    int status = 0;
-    waitpid(pid, &status, 0);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-std::string slurp(const fs::path& p) {
-    std::ifstream f(p);
-    return {std::istreambuf_iterator<char>(f), {}};
-}
+using test::run_cli;
+fs::path cli() { return test::cli_binary(); }
+std::string slurp(const fs::path& p) { return test::read_text(p); }
 
 TEST(BakeCli, BakesAndRefusesBadInput) {
     if (!fs::exists(cli())) GTEST_SKIP() << "nerfpt binary not built: " << cli();

@@ -29,33 +29,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path cli() { return fs::path(NERFPT_BINARY_DIR) / "nerfpt"; }
-
-std::string slurp(const fs::path& p) {
-    std::ifstream f(p);
-    return {std::istreambuf_iterator<char>(f), {}};
-}
-
-// Runs the binary with stdout and stderr into `log`, with PATH replaced when `path_env` is given; returns the
-// exit code.
-int run_cli(std::vector<std::string> args, const fs::path& log, const std::string& path_env = "") {
-    args.insert(args.begin(), cli().string());
-    const pid_t pid = fork();
-    if (pid == 0) {
-        std::vector<char*> argv;
-        for (auto& a : args) argv.push_back(a.data());
-        argv.push_back(nullptr);
-        const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        dup2(fd, 1);
-        dup2(fd, 2);
-        if (!path_env.empty()) setenv("PATH", path_env.c_str(), 1);
-        execv(argv[0], argv.data());
-        _exit(127);
-    }
-    int status = 0;
-    waitpid(pid, &status, 0);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
+using test::read_text;
+using test::run_cli;
+fs::path cli() { return test::cli_binary(); }
+std::string slurp(const fs::path& p) { return read_text(p); }
 
 // Each test trains its own model (a fraction of a second) in its own folder: ctest runs the tests as
 // separate processes, possibly at once.

@@ -22,33 +22,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path cli() { return fs::path(NERFPT_BINARY_DIR) / "nerfpt"; }
-
-pid_t spawn(const std::vector<std::string>& args, const fs::path& log) {
-    const pid_t pid = fork();
-    if (pid == 0) {
-        std::vector<char*> argv;
-        for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-        argv.push_back(nullptr);
-        const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        dup2(fd, 1);
-        dup2(fd, 2);
-        execv(argv[0], argv.data());
-        _exit(127);
-    }
-    return pid;
-}
-
-int wait_exit(pid_t pid) {
-    int status = 0;
-    waitpid(pid, &status, 0);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-std::string slurp(const fs::path& p) {
-    std::ifstream f(p);
-    return {std::istreambuf_iterator<char>(f), {}};
-}
+using test::wait_exit;
+fs::path cli() { return test::cli_binary(); }
+std::string slurp(const fs::path& p) { return test::read_text(p); }
+using test::spawn_cli;
 
 TEST(TrainResume, SigkillThenResumeEqualsAnUninterruptedRun) {
     if (!fs::exists(cli())) GTEST_SKIP() << "nerfpt binary not built: " << cli();
@@ -60,7 +37,7 @@ TEST(TrainResume, SigkillThenResumeEqualsAnUninterruptedRun) {
                          "training": {"batch_samples": 2048}})");
     const std::string steps = "150";
     auto train = [&](const std::string& out, bool resume) {
-        std::vector<std::string> a = {cli().string(), "train", (dir / "data").string(), "-o", out, "--steps",
+        std::vector<std::string> a = {"train", (dir / "data").string(), "-o", out, "--steps",
                                       steps, "--threads", "2", "--checkpoint-every", "5", "-q"};
         if (resume)
             a.push_back("--resume");
@@ -69,10 +46,10 @@ TEST(TrainResume, SigkillThenResumeEqualsAnUninterruptedRun) {
         return a;
     };
     const fs::path ref = dir / "ref.npt", killed = dir / "killed.npt";
-    ASSERT_EQ(wait_exit(spawn(train(ref.string(), false), dir / "ref.log")), 0) << slurp(dir / "ref.log");
+    ASSERT_EQ(wait_exit(spawn_cli(train(ref.string(), false), dir / "ref.log")), 0) << slurp(dir / "ref.log");
 
     // Kill once a checkpoint exists, mid-run.
-    const pid_t pid = spawn(train(killed.string(), false), dir / "killed.log");
+    const int pid = spawn_cli(train(killed.string(), false), dir / "killed.log");
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (!fs::exists(killed) && std::chrono::steady_clock::now() < deadline)
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -86,7 +63,7 @@ TEST(TrainResume, SigkillThenResumeEqualsAnUninterruptedRun) {
     EXPECT_GT(stopped_at, 0u);
     EXPECT_LT(stopped_at, 150u);
 
-    ASSERT_EQ(wait_exit(spawn(train(killed.string(), true), dir / "resume.log")), 0) << slurp(dir / "resume.log");
+    ASSERT_EQ(wait_exit(spawn_cli(train(killed.string(), true), dir / "resume.log")), 0) << slurp(dir / "resume.log");
     const NerfModel a = load_model(ref), b = load_model(killed);
     ASSERT_EQ(a.training->adam.step, 150u);
     ASSERT_EQ(b.training->adam.step, 150u);
@@ -104,7 +81,7 @@ TEST(TrainResume, InterruptSavesACheckpointAndExits130) {
                          "occupancy": {"resolution": 16}, "training": {"batch_samples": 2048}})");
     const fs::path model = dir / "m.npt", log = dir / "train.log";
     // Checkpoints only every 100000 steps: the file can only come from the interrupt.
-    const pid_t pid = spawn({cli().string(), "train", (dir / "data").string(), "-o", model.string(), "--config",
+    const int pid = spawn_cli({"train", (dir / "data").string(), "-o", model.string(), "--config",
                              (dir / "config.json").string(), "--steps", "100000", "--checkpoint-every", "100000"},
                             log);
     // Wait until training runs (its first progress line), then interrupt it like Ctrl-C does.
