@@ -14,6 +14,7 @@ packages=(
     libeigen3-dev
     libopenvdb-dev libnanovdb-dev libboost-dev  # OpenVDB 10 headers include Boost; Debian does not depend on it
     python3
+    ffmpeg colmap  # nerfpt curate / poses / capture drive these command-line tools (and their end-to-end test)
 )
 
 missing=()

@@ -77,6 +77,11 @@ CLI::App* add_curate_command(CLI::App& app, CurateArgs& args) {
 }
 
 int run_curate(const CurateArgs& args, const GlobalSettings& global) {
+    curate_stage(args, global);
+    return 0;
+}
+
+capture::CurateReport curate_stage(const CurateArgs& args, const GlobalSettings& global) {
     capture::CurateSettings settings;
     settings.max_frames = args.max_frames;
     settings.target_frames = args.target_frames;
@@ -117,7 +122,7 @@ int run_curate(const CurateArgs& args, const GlobalSettings& global) {
         report.centroid_sigma.x, report.centroid_sigma.y);
     fmt::print("kept {} of {} decoded frames ({} in the video) in {:.1f} s; wrote {}/curate.json\n",
                report.kept, report.frames.size(), report.info.frame_count, report.seconds, args.output);
-    return 0;
+    return report;
 }
 
 }  // namespace npt::cli

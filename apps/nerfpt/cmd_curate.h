@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 
+#include "capture/curate.h"
 #include "common.h"
 
 namespace npt::cli {
@@ -22,5 +23,7 @@ struct CurateArgs {
 
 CLI::App* add_curate_command(CLI::App& app, CurateArgs& args);
 int run_curate(const CurateArgs& args, const GlobalSettings& global);
+// The stage itself, with progress bars and the summary line; `nerfpt capture` runs it too.
+capture::CurateReport curate_stage(const CurateArgs& args, const GlobalSettings& global);
 
 }  // namespace npt::cli

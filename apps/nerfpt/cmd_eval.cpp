@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/temp_file.h"
 #include "core/image_io.h"
 #include "core/image_metrics.h"
 #include "core/progress.h"
@@ -82,20 +83,6 @@ std::vector<std::string> output_names(const nerf::Dataset& data, const std::vect
         names.push_back(name);
     }
     return names;
-}
-
-// Written beside its destination and renamed, as the image writers do, so an interrupt never leaves half a
-// metrics.json.
-void write_json(const fs::path& path, const nlohmann::json& j) {
-    const fs::path tmp = path.string() + ".tmp";
-    {
-        std::ofstream f(tmp);
-        f << j.dump(2) << "\n";
-        if (!f) throw Error(path.string() + ": cannot write (is the disk full?)");
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) throw Error(path.string() + ": cannot write (" + ec.message() + ")");
 }
 
 }  // namespace
@@ -176,7 +163,7 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
                                         {"mean", {{"psnr", mean_psnr}, {"ssim", mean_ssim}}},
                                         {"seconds", seconds}};
         auto no_interrupt = interrupts.hold();
-        write_json(out_dir / "metrics.json", metrics);
+        write_text_atomic(out_dir / "metrics.json", metrics.dump(2) + "\n");
         fmt::print("wrote {} renders, comparisons and {}\n", views.size(),
                    (out_dir / "metrics.json").string());
     }

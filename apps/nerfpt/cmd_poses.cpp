@@ -42,6 +42,11 @@ CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
 }
 
 int run_poses(const PosesArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    poses_stage(args, global, interrupts);
+    return 0;
+}
+
+PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
     const fs::path out = args.output;
     const fs::path out_dir = out.parent_path().empty() ? fs::path(".") : out.parent_path();
     std::error_code ec;
@@ -73,7 +78,13 @@ int run_poses(const PosesArgs& args, const GlobalSettings& global, InterruptGuar
         capture::write_transforms(run.model, out, ts);
     }
     fmt::print("wrote {}\n", out.string());
-    return 0;
+    PosesSummary summary;
+    summary.frames = run.frames;
+    summary.registered = registered;
+    summary.points = run.model.points.size();
+    summary.reprojection_px = rep.mean_px;
+    for (int i = 0; i < 3; ++i) summary.seconds[i] = run.seconds[i];
+    return summary;
 }
 
 }  // namespace npt::cli

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cstddef>
 #include <string>
 
 #include "common.h"
@@ -20,5 +21,14 @@ struct PosesArgs {
 
 CLI::App* add_poses_command(CLI::App& app, PosesArgs& args);
 int run_poses(const PosesArgs& args, const GlobalSettings& global, InterruptGuard& interrupts);
+
+// What the poses stage found, for `nerfpt capture`'s report.
+struct PosesSummary {
+    size_t frames = 0, registered = 0, points = 0;
+    double reprojection_px = 0;
+    double seconds[3] = {0, 0, 0};  // extraction, matching, mapping
+};
+// The stage itself (COLMAP, checks, transforms.json), printing as `nerfpt poses` does.
+PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, InterruptGuard& interrupts);
 
 }  // namespace npt::cli

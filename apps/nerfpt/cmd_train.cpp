@@ -194,8 +194,10 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
                trainer.steps_done(), format_seconds(model.training->elapsed_seconds),
                nerf::psnr_from_mse(stats.mse));
     if (interrupted) {
-        fmt::print(stderr, "nerfpt: interrupted; continue with: nerfpt train {} -o {} --resume\n", args.data,
-                   args.output);
+        const std::string hint = !args.resume_hint.empty()
+                                     ? args.resume_hint
+                                     : fmt::format("nerfpt train {} -o {} --resume", args.data, args.output);
+        fmt::print(stderr, "nerfpt: interrupted; continue with: {}\n", hint);
         return 128 + interrupts.stop_signal();
     }
     return 0;

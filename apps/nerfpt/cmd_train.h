@@ -22,6 +22,8 @@ struct TrainArgs {
     int checkpoint_every = 0;  // 0: the config's
     bool resume = false;
     bool force = false;
+    // The command that continues after an interrupt, printed then; empty: this train command with --resume.
+    std::string resume_hint;
 };
 
 CLI::App* add_train_command(CLI::App& app, TrainArgs& args);

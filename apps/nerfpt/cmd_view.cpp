@@ -23,6 +23,7 @@
 
 #include "cmd_render.h"
 #include "core/error.h"
+#include "core/executable.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "input_checks.h"
@@ -113,21 +114,6 @@ std::string lower_extension(const fs::path& p) {
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return char(std::tolower(c)); });
     return ext;
-}
-
-// The first executable `name` on PATH, or empty.
-fs::path find_on_path(const std::string& name) {
-    const char* path = std::getenv("PATH");
-    std::string_view rest = path ? path : "";
-    while (!rest.empty()) {
-        const size_t colon = rest.find(':');
-        const std::string dir(rest.substr(0, colon));
-        rest = colon == std::string_view::npos ? std::string_view() : rest.substr(colon + 1);
-        const fs::path candidate = fs::path(dir.empty() ? "." : dir) / name;
-        std::error_code ec;
-        if (fs::is_regular_file(candidate, ec) && access(candidate.c_str(), X_OK) == 0) return candidate;
-    }
-    return {};
 }
 
 // A fresh folder under the system's temporary folder, removed with everything in it when this goes away
@@ -252,7 +238,7 @@ int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard&
     if (video) {
         if (width % 2 || height % 2)
             throw Error("--res " + args.res + ": an .mp4 (yuv420p) needs an even width and height");
-        ffmpeg = find_on_path("ffmpeg");
+        ffmpeg = find_executable("ffmpeg");
         if (ffmpeg.empty())
             throw Error("--output '" + out.string() +
                         "': writing .mp4 needs ffmpeg on PATH (install it, or write .png frames instead)");

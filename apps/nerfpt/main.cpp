@@ -9,6 +9,7 @@
 #include <exception>
 
 #include "cmd_bake.h"
+#include "cmd_capture.h"
 #include "cmd_compare.h"
 #include "cmd_curate.h"
 #include "cmd_eval.h"
@@ -65,6 +66,8 @@ int main(int argc, char** argv) {
     CLI::App* curate_cmd = add_curate_command(app, curate_args);
     PosesArgs poses_args;
     CLI::App* poses_cmd = add_poses_command(app, poses_args);
+    CaptureArgs capture_args;
+    CLI::App* capture_cmd = add_capture_command(app, capture_args);
 
     try {
         app.parse(argc, argv);
@@ -91,6 +94,7 @@ int main(int argc, char** argv) {
         if (import_ngp_cmd->parsed()) return run_import_ngp(import_ngp_args, global);
         if (curate_cmd->parsed()) return run_curate(curate_args, global);
         if (poses_cmd->parsed()) return run_poses(poses_args, global, interrupts);
+        if (capture_cmd->parsed()) return run_capture(capture_args, global, interrupts);
     } catch (const npt::Error& e) {
         print_error(e.what());
         return k_exit_error;

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "bake/grid_writers.h"
-#include "bake/temp_file.h"
+#include "core/temp_file.h"
 #include "core/error.h"
 
 namespace npt::bake {

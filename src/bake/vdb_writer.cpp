@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "bake/grid_writers.h"
-#include "bake/temp_file.h"
+#include "core/temp_file.h"
 #include "core/error.h"
 #include "core/image_io.h"
 

@@ -11,25 +11,12 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/executable.h"
 
 namespace npt::capture {
 namespace fs = std::filesystem;
 
 namespace {
-
-bool on_path(const std::string& exe) {
-    if (exe.find('/') != std::string::npos) return ::access(exe.c_str(), X_OK) == 0;
-    const char* path = std::getenv("PATH");
-    if (!path) return false;
-    std::string p = path;
-    for (size_t start = 0; start <= p.size();) {
-        const size_t end = std::min(p.find(':', start), p.size());
-        const std::string dir = p.substr(start, end - start);
-        if (!dir.empty() && ::access((fs::path(dir) / exe).c_str(), X_OK) == 0) return true;
-        start = end + 1;
-    }
-    return false;
-}
 
 std::string last_line_of(const fs::path& file) {
     std::ifstream in(file);
@@ -93,7 +80,7 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
     if (run.frames < 3)
         throw Error(frames.string() + ": " + std::to_string(run.frames) +
                     " images (.png/.jpg); COLMAP needs at least 3, and a good capture 50-200");
-    if (!on_path(s.colmap))
+    if (find_executable(s.colmap).empty())
         throw Error("'" + s.colmap + "' not found on PATH: install COLMAP (Debian: apt-get install colmap)");
     fs::create_directories(work, ec);
     if (ec) throw Error(work.string() + ": cannot create the work folder (" + ec.message() + ")");

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/executable.h"
 
 namespace npt::capture {
 namespace {
@@ -62,22 +63,9 @@ std::string shell_quote(const std::string& s) {
     return q + "'";
 }
 
-bool program_on_path(const std::string& program) {
-    const char* path = std::getenv("PATH");
-    if (!path) return false;
-    std::stringstream dirs(path);
-    std::string dir;
-    while (std::getline(dirs, dir, ':')) {
-        if (dir.empty()) continue;
-        const std::filesystem::path candidate = std::filesystem::path(dir) / program;
-        if (::access(candidate.c_str(), X_OK) == 0) return true;
-    }
-    return false;
-}
-
 VideoInfo probe_video(const std::filesystem::path& video) {
     if (!std::filesystem::exists(video)) throw Error(fmt::format("{}: no such file", video.string()));
-    if (!program_on_path("ffprobe") || !program_on_path("ffmpeg")) {
+    if (find_executable("ffprobe").empty() || find_executable("ffmpeg").empty()) {
         throw Error(fmt::format("{}: ffmpeg/ffprobe not found on PATH; install ffmpeg (apt install ffmpeg)",
                                 video.string()));
     }

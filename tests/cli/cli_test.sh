@@ -154,6 +154,33 @@ grep -q "'colmap' not found on PATH: install COLMAP" "$tmp/err" || fail "poses w
 [[ ! -e "$tmp/transforms.json" ]] || fail "poses without colmap wrote transforms.json"
 expect_error 2 "matcher" poses "$tmp/frames" -o "$tmp/transforms.json" --matcher fancy
 
+# capture: missing video, missing tools, a work folder that holds another video's capture, bad options.
+run capture --help
+for opt in --target-frames --matcher --holdout-every --train-time --train-steps --downscale --turntable-frames --force; do
+    grep -q -- "$opt" "$tmp/out" || fail "nerfpt capture --help does not mention $opt"
+done
+expect_error 1 "VIDEO.*no_such.mp4" capture "$tmp/no_such.mp4" -o "$tmp/cap"
+touch "$tmp/clip.mp4" "$tmp/other.mp4"
+rc=0
+PATH="$tmp/emptybin" "$nerfpt" capture "$tmp/clip.mp4" -o "$tmp/cap" >"$tmp/out" 2>"$tmp/err" || rc=$?
+[[ $rc -eq 1 ]] || fail "capture without tools: exit code $rc"
+grep -q "ffmpeg, ffprobe, colmap not found on PATH.*apt-get install ffmpeg colmap" "$tmp/err" ||
+    fail "capture without tools: $(cat "$tmp/err")"
+[[ ! -e "$tmp/cap" ]] || fail "capture without tools created its work folder"
+expect_error 2 "holdout-every" capture "$tmp/clip.mp4" -o "$tmp/cap" --holdout-every -1
+expect_error 2 "downscale" capture "$tmp/clip.mp4" -o "$tmp/cap" --downscale 100
+if command -v ffmpeg >/dev/null && command -v colmap >/dev/null; then
+    expect_error 1 "holdout-every 1" capture "$tmp/clip.mp4" -o "$tmp/cap" --holdout-every 1
+    mkdir -p "$tmp/cap"
+    echo "{\"version\": 1, \"video\": \"$tmp/other.mp4\", \"stages\": {}}" >"$tmp/cap/capture.json"
+    expect_error 1 "capture.json: this folder holds the capture of .*other.mp4.*--force" \
+        capture "$tmp/clip.mp4" -o "$tmp/cap"
+    echo "{" >"$tmp/cap/capture.json"
+    expect_error 1 "capture.json: not valid JSON.*--force" capture "$tmp/clip.mp4" -o "$tmp/cap"
+    # An empty file is not a video: curate's error, after the work folder was made.
+    expect_error 1 "clip.mp4" capture "$tmp/clip.mp4" -o "$tmp/cap2"
+fi
+
 if [[ $failures -gt 0 ]]; then
     echo "$failures check(s) failed"
     exit 1

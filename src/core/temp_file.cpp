@@ -1,14 +1,15 @@
-#include "bake/temp_file.h"
+#include "core/temp_file.h"
 
 #include <unistd.h>
 
+#include <cstdio>
 #include <random>
 #include <string>
 #include <system_error>
 
 #include "core/error.h"
 
-namespace npt::bake {
+namespace npt {
 
 // Pid and a random number: two bakes writing into one folder never share a temporary name, and the rename
 // stays within one file system, so it is atomic.
@@ -31,4 +32,14 @@ void TempFile::commit() {
     m_committed = true;
 }
 
-}  // namespace npt::bake
+void write_text_atomic(const std::filesystem::path& path, std::string_view text) {
+    TempFile tmp(path);
+    std::FILE* f = std::fopen(tmp.path().c_str(), "wb");
+    if (!f) throw Error(path.string() + ": cannot write (folder missing or not writable?)");
+    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size() && std::fflush(f) == 0 &&
+                    ::fsync(::fileno(f)) == 0;
+    if (std::fclose(f) != 0 || !ok) throw Error(path.string() + ": cannot write (disk full?)");
+    tmp.commit();
+}
+
+}  // namespace npt

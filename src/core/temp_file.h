@@ -3,8 +3,9 @@
 #pragma once
 
 #include <filesystem>
+#include <string_view>
 
-namespace npt::bake {
+namespace npt {
 
 class TempFile {
   public:
@@ -22,4 +23,8 @@ class TempFile {
     bool m_committed = false;
 };
 
-}  // namespace npt::bake
+// Writes `text` to `path` through a TempFile (data synced before the rename), so a crash or a full disk
+// leaves the old file or none, never half of the new one. Throws npt::Error naming the file.
+void write_text_atomic(const std::filesystem::path& path, std::string_view text);
+
+}  // namespace npt

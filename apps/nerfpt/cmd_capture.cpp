@@ -1,0 +1,331 @@
+#include "cmd_capture.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "capture/camera_rig.h"
+#include "capture/transforms_split.h"
+#include "capture_record.h"
+#include "cmd_curate.h"
+#include "cmd_eval.h"
+#include "cmd_poses.h"
+#include "cmd_train.h"
+#include "cmd_view.h"
+#include "core/error.h"
+#include "core/executable.h"
+#include "input_checks.h"
+#include "interrupt.h"
+#include "nerf/model_file.h"
+
+namespace npt::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Automatic --downscale: the training images' longest side at most this. A few minutes of CPU training
+// cannot resolve more detail, and smaller images load faster and take less memory.
+constexpr int k_auto_train_side = 400;
+constexpr int k_stages = 6;
+
+// What `--force` removes: only what capture itself writes, never the whole folder.
+const std::vector<std::string> k_outputs = {"frames",      "colmap",       "transforms.json",
+                                            "transforms_train.json",       "transforms_test.json",
+                                            "model.npt",   "eval",         "turntable.mp4",
+                                            "capture.json", "report.md"};
+
+class Clock {
+  public:
+    double seconds() const {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
+    }
+
+  private:
+    std::chrono::steady_clock::time_point m_start = std::chrono::steady_clock::now();
+};
+
+void banner(const GlobalSettings& global, int k, const std::string& text) {
+    if (global.quiet) return;
+    std::fflush(stdout);  // the stages print results on stdout: keep them in order with these lines
+    fmt::print(stderr, "capture [{}/{}] {}\n", k, k_stages, text);
+}
+
+void require_tools() {
+    std::vector<std::string> missing;
+    for (const char* tool : {"ffmpeg", "ffprobe", "colmap"})
+        if (find_executable(tool).empty()) missing.push_back(tool);
+    if (!missing.empty())
+        throw Error(fmt::format("{} not found on PATH: nerfpt capture needs them (Debian: apt-get install ffmpeg "
+                                "colmap)",
+                                fmt::join(missing, ", ")));
+}
+
+int auto_downscale(int width, int height) {
+    const int side = std::max(width, height);
+    return std::max(1, (side + k_auto_train_side - 1) / k_auto_train_side);
+}
+
+nlohmann::json read_json_file(const fs::path& path) {
+    std::ifstream in(path);
+    if (!in) throw Error(path.string() + ": cannot read");
+    try {
+        return nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+        throw Error(path.string() + ": not valid JSON (" + e.what() + ")");
+    }
+}
+
+}  // namespace
+
+CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
+    CLI::App* cmd = app.add_subcommand("capture", "A phone video to a trained NeRF: curate, poses, train, report");
+    cmd->footer(
+        "Runs, in WORKDIR:\n"
+        "  1 curate     VIDEO -> frames/ (nerfpt curate: sharpest frame per time window, subject check)\n"
+        "  2 poses      frames/ -> transforms.json (nerfpt poses: COLMAP, one shared OPENCV camera)\n"
+        "  3 split      every --holdout-every'th frame -> transforms_test.json, the rest -> transforms_train.json\n"
+        "  4 train      -> model.npt (nerfpt train on the training frames, --train-time seconds)\n"
+        "  5 eval       PSNR/SSIM on the held-out frames -> eval/ (renders, comparisons, metrics.json)\n"
+        "  6 turntable  -> turntable.mp4, an orbit at the capture's camera distance, height and field of view\n"
+        "and writes capture.json (every stage's numbers) and report.md after each stage. Run the same command\n"
+        "again after an error or Ctrl-C and it continues with the first unfinished stage (training resumes from\n"
+        "its last checkpoint); a larger --train-time continues training and redoes eval and turntable; --force\n"
+        "starts over. Needs ffmpeg and colmap on PATH (Debian: apt-get install ffmpeg colmap).\n"
+        "Example: nerfpt capture Beer.mp4 -o beer --train-time 600");
+    cmd->add_option("VIDEO", args.video, "Video walking around the object (anything ffmpeg decodes)")->required();
+    cmd->add_option("-o,--output", args.output, "Work folder (created if missing)")->required();
+    cmd->add_option("--target-frames", args.target_frames, "curate: frames to keep, one per time window")
+        ->check(CLI::Range(3, 100000))
+        ->capture_default_str();
+    cmd->add_option("--max-frames", args.max_frames, "curate: decode at most N frames, evenly spread (0: all)")
+        ->check(CLI::NonNegativeNumber);
+    auto* hmin = cmd->add_option("--hsv-min", args.hsv_min, "curate: subject colour, lower bound H,S,V");
+    auto* hmax = cmd->add_option("--hsv-max", args.hsv_max, "curate: subject colour, upper bound H,S,V");
+    hmin->needs(hmax);
+    hmax->needs(hmin);
+    cmd->add_option("--matcher", args.matcher, "poses: sequential (video order) or exhaustive")
+        ->check(CLI::IsMember({"sequential", "exhaustive"}))
+        ->capture_default_str();
+    cmd->add_option("--aabb-scale", args.aabb_scale, "poses: instant-ngp's scene extent in unit cubes")
+        ->check(CLI::IsMember({1, 2, 4, 8, 16, 32, 64, 128}))
+        ->capture_default_str();
+    cmd->add_option("--min-registered", args.min_registered,
+                    "poses: fraction of the frames COLMAP must register, 0..1")
+        ->check(CLI::Range(0.0, 1.0))
+        ->capture_default_str();
+    cmd->add_option("--holdout-every", args.holdout_every,
+                    "Hold out every Nth frame for the PSNR report, 2..1000; 0: train on all, no PSNR")
+        ->check(CLI::Range(0, 1000))
+        ->capture_default_str();
+    cmd->add_option("--train-time", args.train_seconds, "train: seconds of training in total")
+        ->check(CLI::Range(1.0, 1e7))
+        ->capture_default_str();
+    cmd->add_option("--train-steps", args.train_steps, "train: steps in total instead of --train-time")
+        ->check(CLI::Range(uint64_t(1), uint64_t(100000000)));
+    cmd->add_option("--downscale", args.downscale,
+                    fmt::format("train/eval: shrink the frames by this factor (0: automatic, longest side at "
+                                "most {} px)",
+                                k_auto_train_side))
+        ->check(CLI::Range(0, 64))
+        ->capture_default_str();
+    cmd->add_option("--config", args.config, "train: JSON model and training settings (docs/formats.md)");
+    cmd->add_option("--turntable-frames", args.turntable_frames, "Frames of the turntable video (0: none)")
+        ->check(CLI::Range(0, 100000))
+        ->capture_default_str();
+    cmd->add_option("--turntable-res", args.turntable_res, "WIDTHxHEIGHT of the turntable (default: the training size)");
+    cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads")
+        ->check(CLI::Range(0, 4096));
+    cmd->add_flag("--force", args.force, "Remove what an earlier capture wrote in the work folder, start over");
+    return cmd;
+}
+
+int run_capture(const CaptureArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    require_file(args.video, "VIDEO");
+    require_tools();
+    if (args.holdout_every == 1) throw Error("--holdout-every 1 would hold out every frame: use 0 or >= 2");
+    if (!args.config.empty()) require_file(args.config, "--config");
+    const fs::path work = args.output;
+    prepare_output_folder(work, "--output");
+    if (args.force) {
+        for (const std::string& name : k_outputs) {
+            std::error_code ec;
+            fs::remove_all(work / name, ec);
+            if (ec) throw Error((work / name).string() + ": cannot remove (" + ec.message() + ")");
+        }
+    }
+    CaptureRecord record(work, args.video);
+    const fs::path frames = work / "frames", transforms = work / "transforms.json", model = work / "model.npt";
+    const std::string continue_hint = fmt::format("the same 'nerfpt capture {} -o {} ...' command", args.video,
+                                                  args.output);
+
+    // 1 curate
+    if (record.done("curate")) {
+        banner(global, 1, "curate: done in an earlier run (frames/)");
+    } else {
+        banner(global, 1, "curate: choosing frames");
+        CurateArgs c;
+        c.video = args.video;
+        c.output = frames.string();
+        c.max_frames = args.max_frames;
+        c.target_frames = args.target_frames;
+        c.hsv_min = args.hsv_min;
+        c.hsv_max = args.hsv_max;
+        const capture::CurateReport r = curate_stage(c, global);
+        record.finish("curate", {{"kept", r.kept},
+                                 {"decoded", r.frames.size()},
+                                 {"video_frames", r.info.frame_count},
+                                 {"video_width", r.info.width},
+                                 {"video_height", r.info.height},
+                                 {"fps", r.info.fps},
+                                 {"seconds", r.seconds}});
+    }
+
+    // 2 poses
+    if (record.done("poses")) {
+        banner(global, 2, "poses: done in an earlier run (transforms.json)");
+    } else {
+        banner(global, 2, "poses: COLMAP");
+        PosesArgs p;
+        p.frames = frames.string();
+        p.output = transforms.string();
+        p.work = (work / "colmap").string();
+        p.matcher = args.matcher;
+        p.aabb_scale = args.aabb_scale;
+        p.min_registered = args.min_registered;
+        const Clock clock;
+        const PosesSummary s = poses_stage(p, global, interrupts);
+        record.finish("poses", {{"frames", s.frames},
+                                {"registered", s.registered},
+                                {"points", s.points},
+                                {"reprojection_px", s.reprojection_px},
+                                {"extraction_seconds", s.seconds[0]},
+                                {"matching_seconds", s.seconds[1]},
+                                {"mapping_seconds", s.seconds[2]},
+                                {"seconds", clock.seconds()}});
+    }
+
+    // 3 split
+    const bool hold_out = args.holdout_every > 0;
+    if (record.done("split") && record.stage("split").value("every", -1) == args.holdout_every) {
+        banner(global, 3, "split: done in an earlier run");
+    } else if (hold_out) {
+        banner(global, 3, fmt::format("split: holding out every {}th frame", args.holdout_every));
+        const capture::SplitCounts n = capture::split_transforms(transforms, args.holdout_every);
+        if (!global.quiet) fmt::print("{} training frames, {} held out\n", n.train, n.test);
+        record.forget_from("train");  // a different split invalidates the model trained on the old one
+        record.finish("split", {{"every", args.holdout_every}, {"train", n.train}, {"test", n.test}});
+    } else {
+        banner(global, 3, "split: none (--holdout-every 0), training on every frame");
+        for (const char* name : {"transforms_train.json", "transforms_test.json"}) fs::remove(work / name);
+        record.forget_from("train");
+        record.finish("split", {{"every", 0}, {"train", record.stage("poses").value("registered", 0)}, {"test", 0}});
+    }
+
+    // 4 train
+    const capture::RigSummary rig = capture::summarize_rig(transforms);
+    const int downscale = args.downscale > 0 ? args.downscale : auto_downscale(rig.width, rig.height);
+    const double target_seconds = args.train_steps ? 0.0 : args.train_seconds;
+    const nlohmann::json train_target = {{"steps", args.train_steps}, {"time", target_seconds}, {"downscale", downscale}};
+    std::error_code ec;
+    if (record.done("train") && record.stage("train").value("target", nlohmann::json()) == train_target &&
+        fs::exists(model, ec)) {
+        banner(global, 4, "train: done in an earlier run (model.npt)");
+    } else {
+        const bool resume = fs::exists(model, ec);
+        banner(global, 4, fmt::format("train: {}{}", resume ? "continuing model.npt to " : "",
+                                      args.train_steps ? fmt::format("{} steps", args.train_steps)
+                                                       : fmt::format("{:.0f} s", args.train_seconds)));
+        record.forget_from("train");
+        TrainArgs t;
+        t.data = work.string();
+        t.output = model.string();
+        t.split = "train";
+        t.steps = args.train_steps;
+        t.seconds = target_seconds;
+        t.downscale = downscale;
+        t.threads = args.threads;
+        t.config = resume ? std::string() : args.config;
+        t.resume = resume;
+        t.resume_hint = continue_hint;
+        const int rc = run_train(t, global, interrupts);
+        if (rc != 0) return rc;
+        const nerf::NerfModel m = nerf::load_model(model);
+        const double seconds = m.training ? m.training->elapsed_seconds : 0.0;
+        const uint64_t steps = m.training ? m.training->adam.step : 0;
+        record.finish("train", {{"target", train_target},
+                                {"steps", steps},
+                                {"seconds", seconds},
+                                {"downscale", downscale},
+                                {"width", rig.width / downscale},
+                                {"height", rig.height / downscale}});
+    }
+
+    // 5 eval
+    if (!hold_out) {
+        banner(global, 5, "eval: skipped (no held-out frames)");
+    } else if (record.done("eval")) {
+        banner(global, 5, "eval: done in an earlier run (eval/)");
+    } else {
+        banner(global, 5, "eval: rendering the held-out frames");
+        EvalArgs e;
+        e.model = model.string();
+        e.data = work.string();
+        e.split = "test";
+        e.output = (work / "eval").string();
+        e.downscale = downscale;
+        e.threads = args.threads;
+        const Clock clock;
+        const int rc = run_eval(e, global, interrupts);
+        if (rc != 0) return rc;
+        const nlohmann::json metrics = read_json_file(work / "eval" / "metrics.json");
+        const nlohmann::json mean = metrics.value("mean", nlohmann::json::object());
+        record.finish("eval", {{"views", metrics.value("images", nlohmann::json::array()).size()},
+                               {"psnr", mean.value("psnr", 0.0)},
+                               {"ssim", mean.value("ssim", 0.0)},
+                               {"seconds", clock.seconds()}});
+    }
+
+    // 6 turntable
+    if (args.turntable_frames == 0) {
+        banner(global, 6, "turntable: skipped (--turntable-frames 0)");
+    } else if (record.done("turntable")) {
+        banner(global, 6, "turntable: done in an earlier run (turntable.mp4)");
+    } else {
+        banner(global, 6, "turntable: rendering turntable.mp4");
+        ViewArgs v;
+        v.model = model.string();
+        v.output = (work / "turntable.mp4").string();
+        v.orbit = args.turntable_frames;
+        // Even sizes: the video is yuv420p.
+        const int tw = (rig.width / downscale) & ~1, th = (rig.height / downscale) & ~1;
+        v.res = args.turntable_res.empty() ? fmt::format("{}x{}", tw, th) : args.turntable_res;
+        v.fov = float(rig.fov_x_deg);
+        v.elevation = float(std::clamp(rig.median_elevation_deg, -80.0, 80.0));
+        v.distance = float(rig.median_distance);
+        v.threads = args.threads;
+        const Clock clock;
+        const int rc = run_view(v, global, interrupts);
+        if (rc != 0) return rc;
+        int w = tw, h = th;
+        std::sscanf(v.res.c_str(), "%dx%d", &w, &h);
+        record.finish("turntable", {{"file", "turntable.mp4"},
+                                    {"frames", args.turntable_frames},
+                                    {"width", w},
+                                    {"height", h},
+                                    {"elevation_deg", v.elevation},
+                                    {"distance", v.distance},
+                                    {"seconds", clock.seconds()}});
+    }
+    fmt::print("\n{}\nwrote {} and {}\n", record.markdown(), record.path().string(),
+               (work / "report.md").string());
+    return 0;
+}
+
+}  // namespace npt::cli

@@ -1,0 +1,42 @@
+// `nerfpt capture`: a phone video to a trained NeRF in one command — curate, poses (COLMAP), a held-out
+// split, train, eval on the held-out frames, a turntable video and a report — in one work folder. Each stage
+// records its result in WORKDIR/capture.json when it finishes, so running the same command again after a
+// crash or Ctrl-C continues with the first unfinished stage (training resumes from its checkpoint).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <cstdint>
+#include <string>
+
+#include "common.h"
+
+namespace npt::cli {
+
+struct CaptureArgs {
+    std::string video;
+    std::string output;
+    // curate
+    int64_t max_frames = 0;
+    int target_frames = 100;
+    std::string hsv_min, hsv_max;
+    // poses
+    std::string matcher = "sequential";
+    int aabb_scale = 16;
+    double min_registered = 0.5;
+    // split, train, eval
+    int holdout_every = 8;  // 0: train on every frame, no held-out PSNR
+    double train_seconds = 300;
+    uint64_t train_steps = 0;  // 0: --train-time decides
+    int downscale = 0;         // 0: automatic, longest side at most k_auto_train_side
+    std::string config;
+    // turntable
+    int turntable_frames = 120;  // 0: none
+    std::string turntable_res;   // empty: the training image size
+    int threads = 0;
+    bool force = false;
+};
+
+CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args);
+int run_capture(const CaptureArgs& args, const GlobalSettings& global, InterruptGuard& interrupts);
+
+}  // namespace npt::cli
