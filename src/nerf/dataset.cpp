@@ -326,7 +326,12 @@ void downscale_dataset(Dataset& ds, int factor) {
 }
 
 Ray generate_pixel_ray(const Camera& camera, float px, float py) {
-    const Vec3 d_cam((px - camera.cx) / camera.fx, -(py - camera.cy) / camera.fy, -1.0f);
+    // Normalised coordinates with y down (OpenCV's, where the distortion model lives), flipped to OpenGL's
+    // y up for the direction. -(a / b) rounds exactly as (-a) / b did: the zero-distortion ray is unchanged.
+    float x = (px - camera.cx) / camera.fx, y = (py - camera.cy) / camera.fy;
+    const LensDistortion lens = camera.distortion();
+    if (!lens.is_identity()) undistort(lens, x, y, &x, &y);
+    const Vec3 d_cam(x, -y, -1.0f);
     const Vec3 d = camera.camera_to_world.transform_vector(d_cam);
     return Ray{camera.camera_to_world.transform_point(Vec3(0.0f, 0.0f, 0.0f)), normalize(d)};
 }

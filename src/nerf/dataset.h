@@ -12,18 +12,21 @@
 
 #include "core/transform.h"
 #include "core/vec.h"
+#include "nerf/lens_distortion.h"
 
 namespace npt::nerf {
 
 // A pinhole camera as transforms.json stores it. camera_to_world is the OpenGL convention of NeRF-synthetic
-// and instant-ngp (the camera looks down its -Z axis, +Y is up in the image). Distortion is stored for later
-// use; nothing applies it yet.
+// and instant-ngp (the camera looks down its -Z axis, +Y is up in the image). The OpenCV distortion is
+// applied by generate_pixel_ray, so training, eval and view all see the photo's own (distorted) pixels.
 struct Camera {
     Mat4 camera_to_world;
     float fx = 0, fy = 0;  // focal lengths in pixels
     float cx = 0, cy = 0;  // principal point in pixels, from the image's top-left corner
     int width = 0, height = 0;
     float k1 = 0, k2 = 0, p1 = 0, p2 = 0;  // OpenCV radial / tangential distortion
+
+    LensDistortion distortion() const { return {k1, k2, p1, p2}; }
 };
 
 struct Dataset {
@@ -64,8 +67,10 @@ Dataset load_dataset(const std::filesystem::path& folder_or_json, const std::str
 // factor lose their last rows/columns. Throws npt::Error when factor < 1 or larger than the image.
 void downscale_dataset(Dataset& ds, int factor);
 
-// The world-space ray through image coordinates (px, py): pixel centres are at +0.5, y runs down the image.
-// The direction is normalised; the origin is the camera position.
+// The world-space ray through image coordinates (px, py) of the (distorted) photo: pixel centres are at +0.5,
+// y runs down the image. The pixel is undistorted with the camera's k1, k2, p1, p2 (Newton iteration,
+// lens_distortion.h); with all four exactly 0 the pinhole ray comes out bit for bit as before. The direction
+// is normalised; the origin is the camera position.
 Ray generate_pixel_ray(const Camera& camera, float px, float py);
 
 }  // namespace npt::nerf

@@ -1,11 +1,12 @@
 // transforms.json loading: a small data set written here (cameras, names, exact pixel bytes), pixel rays
-// against hand-computed values, the camera_angle_x focal length, every bad input's message, and the shared
-// lego set.
+// against hand-computed values, distorted pixel rays against the forward lens model, the camera_angle_x focal
+// length, every bad input's message, and the shared lego set.
 #include "nerf/dataset.h"
 
 #include <gtest/gtest.h>
 #include <stb_image_write.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -129,6 +130,101 @@ TEST(Dataset, PixelRay) {
     const float len = std::sqrt(1.0f + 1.0f / 36.0f + 0.09f);
     test::expect_near(corner.o, Vec3(1, 2, 3), 0.0f);
     test::expect_near(corner.d, Vec3(-1.0f / len, (1.0f / 6.0f) / len, 0.3f / len), 1e-6f);
+}
+
+// A phone-like camera (1920x1080, ~65 degrees across, principal point off centre) at a pose with no special
+// axes, so a swapped sign or axis in the distortion shows.
+Camera phone_camera(float k1, float k2, float p1, float p2) {
+    Camera cam;
+    cam.width = 1920;
+    cam.height = 1080;
+    cam.fx = 1510.5f;
+    cam.fy = 1508.25f;
+    cam.cx = 961.3f;
+    cam.cy = 538.7f;
+    cam.k1 = k1;
+    cam.k2 = k2;
+    cam.p1 = p1;
+    cam.p2 = p2;
+    // Unit quaternion (0.2, -0.4, 0.1, w) and a move to (0.5, -1, 2).
+    const double qx = 0.2, qy = -0.4, qz = 0.1, qw = std::sqrt(1.0 - 0.04 - 0.16 - 0.01);
+    cam.camera_to_world = Mat4::translation(0.5, -1, 2) * Mat4::rotation_quat(qx, qy, qz, qw);
+    return cam;
+}
+
+// The forward model: world -> OpenGL camera -> OpenCV normalised (y down) -> distorted -> pixel.
+Vec2 project_distorted(const Camera& cam, Vec3 p) {
+    const Vec3 q = cam.camera_to_world.inverse().transform_point(p);
+    const double u = q.x / -q.z, v = -q.y / -q.z;
+    double ud, vd;
+    distort(cam.distortion(), u, v, &ud, &vd);
+    return Vec2(float(cam.cx + cam.fx * ud), float(cam.cy + cam.fy * vd));
+}
+
+// Angle between the ray's direction and the direction from its origin to p, in radians.
+double angle_to(const Ray& r, Vec3 p) {
+    const Vec3 to = p - r.o;
+    const double dx = to.x, dy = to.y, dz = to.z;
+    const double cx = r.d.y * dz - r.d.z * dy, cy = r.d.z * dx - r.d.x * dz, cz = r.d.x * dy - r.d.y * dx;
+    return std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), r.d.x * dx + r.d.y * dy + r.d.z * dz);
+}
+
+TEST(Dataset, PixelRayUndistortsThroughTheProjectedPoint) {
+    const Camera pinhole = phone_camera(0, 0, 0, 0);
+    const Vec3 o = pinhole.camera_to_world.transform_point(Vec3(0.0f, 0.0f, 0.0f));
+    // The coefficients of a real phone clip (COLMAP's OPENCV model) and a stronger barrel lens with
+    // tangential terms.
+    for (const Camera& cam :
+         {phone_camera(0.0317f, -0.0498f, 4e-4f, -6e-4f), phone_camera(-0.1f, 0.02f, 1e-3f, -1e-3f)}) {
+        double pinhole_worst = 0;
+        int seen = 0;
+        // Points in front of the camera over the whole frame, corners included, at several depths.
+        for (double a : {-0.6, -0.3, 0.0, 0.25, 0.62})
+            for (double b : {-0.34, -0.1, 0.0, 0.2, 0.35})
+                for (double depth : {0.7, 3.0, 25.0}) {
+                    const Vec3 p = pinhole.camera_to_world.transform_point(
+                        Vec3(float(a * depth), float(b * depth), float(-depth)));
+                    const Vec2 px = project_distorted(cam, p);
+                    ASSERT_TRUE(px.x > 0 && px.x < cam.width && px.y > 0 && px.y < cam.height)
+                        << a << " " << b;
+                    const Ray r = generate_pixel_ray(cam, px.x, px.y);
+                    test::expect_near(r.o, o, 0.0f);
+                    EXPECT_LT(angle_to(r, p), 1e-5) << "point (" << a << ", " << b << ") at depth " << depth;
+                    pinhole_worst =
+                        std::max(pinhole_worst, angle_to(generate_pixel_ray(pinhole, px.x, px.y), p));
+                    ++seen;
+                }
+        EXPECT_EQ(seen, 75);
+        // Ignoring the lens misses by 50x the tolerance or more (the phone lens moves corners by ~3 pixels):
+        // the test would notice distortion not being applied.
+        EXPECT_GT(pinhole_worst, 5e-4) << "k1 " << cam.k1;
+    }
+}
+
+TEST(Dataset, PixelRayWithoutDistortionIsThePinholeRayExactly) {
+    const Camera cam = phone_camera(0, 0, 0, 0);
+    for (float px : {0.5f, 17.25f, 960.5f, 1919.5f})
+        for (float py : {0.5f, 333.75f, 1079.5f}) {
+            // The pinhole formula generate_pixel_ray used before distortion was applied, bit for bit.
+            const Vec3 d_cam((px - cam.cx) / cam.fx, -(py - cam.cy) / cam.fy, -1.0f);
+            const Vec3 want = normalize(cam.camera_to_world.transform_vector(d_cam));
+            const Ray r = generate_pixel_ray(cam, px, py);
+            EXPECT_EQ(r.d.x, want.x);
+            EXPECT_EQ(r.d.y, want.y);
+            EXPECT_EQ(r.d.z, want.z);
+        }
+}
+
+TEST(Dataset, DistortionPerFrameOverridesGlobal) {
+    // instant-ngp writes k1, k2, p1, p2 at the top level (one shared camera) or in each frame.
+    const fs::path dir = test::temp_dir();
+    write_one_frame(dir, "\"k1\": 0.03, \"p2\": -0.001, ", k_identity,
+                    "\"fl_x\": 5, \"k1\": 0.5, \"k2\": -0.05, \"p1\": 0.002,");
+    const Camera c = load_dataset(dir, "").cameras[0];
+    EXPECT_FLOAT_EQ(c.k1, 0.03f);
+    EXPECT_FLOAT_EQ(c.k2, -0.05f);
+    EXPECT_FLOAT_EQ(c.p1, 0.002f);
+    EXPECT_FLOAT_EQ(c.p2, -0.001f);
 }
 
 TEST(Dataset, CameraAngleGivesFocalLength) {
