@@ -26,9 +26,6 @@ struct VideoInfo {
     int64_t frame_count = 0;  // from the container, or duration x fps when the container does not say
 };
 
-// True when `program` is an executable file in a directory of $PATH.
-bool program_on_path(const std::string& program);
-
 // Runs ffprobe on the file. Throws npt::Error naming the file when ffprobe is missing, the file is not a
 // video, or it has no frames.
 VideoInfo probe_video(const std::filesystem::path& video);

@@ -1,6 +1,7 @@
 // The curate stage on synthetic frames made here: blur score, window/threshold selection, subject mask and
 // centroid rule, settings errors; and one run of the whole stage on a tiny ffmpeg-made video.
 #include "capture/curate.h"
+#include "core/executable.h"
 
 #include <gtest/gtest.h>
 
@@ -228,7 +229,7 @@ TEST(Curate, ContactSheetFramesKeptGreenAndDroppedRed) {
     EXPECT_LT(first[0], 100);
 }
 
-bool have_ffmpeg() { return program_on_path("ffmpeg") && program_on_path("ffprobe"); }
+bool have_ffmpeg() { return !find_executable("ffmpeg").empty() && !find_executable("ffprobe").empty(); }
 
 TEST(Curate, WholeStageOnATinyVideo) {
     if (!have_ffmpeg()) GTEST_SKIP() << "ffmpeg/ffprobe not on PATH: the curate end-to-end test needs them";
