@@ -1,6 +1,7 @@
 #include "cmd_capture.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <chrono>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "capture/camera_rig.h"
+#include "capture/frame_source.h"
 #include "capture/transforms_split.h"
 #include "capture_record.h"
 #include "cmd_curate.h"
@@ -151,6 +153,10 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
     require_tools();
     if (args.holdout_every == 1) throw Error("--holdout-every 1 would hold out every frame: use 0 or >= 2");
     if (!args.config.empty()) require_file(args.config, "--config");
+    // A file ffmpeg cannot read fails here, before the work folder is made.
+    const capture::VideoInfo info = capture::probe_video(args.video);
+    spdlog::debug("{}: {}x{}, {} frames at {:.2f} fps", args.video, info.width, info.height, info.frame_count,
+                 info.fps);
     const fs::path work = args.output;
     prepare_output_folder(work, "--output");
     if (args.force) {

@@ -171,14 +171,16 @@ expect_error 2 "holdout-every" capture "$tmp/clip.mp4" -o "$tmp/cap" --holdout-e
 expect_error 2 "downscale" capture "$tmp/clip.mp4" -o "$tmp/cap" --downscale 100
 if command -v ffmpeg >/dev/null && command -v colmap >/dev/null; then
     expect_error 1 "holdout-every 1" capture "$tmp/clip.mp4" -o "$tmp/cap" --holdout-every 1
+    ffmpeg -nostdin -v error -f lavfi -i testsrc=size=64x48:rate=10 -frames:v 10 -pix_fmt yuv420p "$tmp/real.mp4"
     mkdir -p "$tmp/cap"
     echo "{\"version\": 1, \"video\": \"$tmp/other.mp4\", \"stages\": {}}" >"$tmp/cap/capture.json"
     expect_error 1 "capture.json: this folder holds the capture of .*other.mp4.*--force" \
-        capture "$tmp/clip.mp4" -o "$tmp/cap"
+        capture "$tmp/real.mp4" -o "$tmp/cap"
     echo "{" >"$tmp/cap/capture.json"
-    expect_error 1 "capture.json: not valid JSON.*--force" capture "$tmp/clip.mp4" -o "$tmp/cap"
-    # An empty file is not a video: curate's error, after the work folder was made.
-    expect_error 1 "clip.mp4" capture "$tmp/clip.mp4" -o "$tmp/cap2"
+    expect_error 1 "capture.json: not valid JSON.*--force" capture "$tmp/real.mp4" -o "$tmp/cap"
+    # An empty file is not a video: refused before the work folder is made.
+    expect_error 1 "clip.mp4: not a video" capture "$tmp/clip.mp4" -o "$tmp/cap2"
+    [[ ! -e "$tmp/cap2" ]] || fail "capture of a non-video created its work folder"
 fi
 
 if [[ $failures -gt 0 ]]; then
