@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -21,6 +20,7 @@
 #include "input_checks.h"
 #include "dataset_loading.h"
 #include "interrupt.h"
+#include "json_output.h"
 #include "nerf/dataset.h"
 #include "nerf/eval_images.h"
 #include "nerf/model_file.h"
@@ -82,20 +82,6 @@ std::vector<std::string> output_names(const nerf::Dataset& data, const std::vect
         names.push_back(name);
     }
     return names;
-}
-
-// Written beside its destination and renamed, as the image writers do, so an interrupt never leaves half a
-// metrics.json.
-void write_json(const fs::path& path, const nlohmann::json& j) {
-    const fs::path tmp = path.string() + ".tmp";
-    {
-        std::ofstream f(tmp);
-        f << j.dump(2) << "\n";
-        if (!f) throw Error(path.string() + ": cannot write (is the disk full?)");
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) throw Error(path.string() + ": cannot write (" + ec.message() + ")");
 }
 
 }  // namespace
