@@ -15,6 +15,7 @@
 #include "cmd_eval.h"
 #include "cmd_import_ngp.h"
 #include "cmd_info.h"
+#include "cmd_pose_error.h"
 #include "cmd_poses.h"
 #include "cmd_render.h"
 #include "cmd_train.h"
@@ -68,6 +69,8 @@ int main(int argc, char** argv) {
     CLI::App* poses_cmd = add_poses_command(app, poses_args);
     CaptureArgs capture_args;
     CLI::App* capture_cmd = add_capture_command(app, capture_args);
+    PoseErrorArgs pose_error_args;
+    CLI::App* pose_error_cmd = add_pose_error_command(app, pose_error_args);
 
     try {
         app.parse(argc, argv);
@@ -95,6 +98,7 @@ int main(int argc, char** argv) {
         if (curate_cmd->parsed()) return run_curate(curate_args, global);
         if (poses_cmd->parsed()) return run_poses(poses_args, global, interrupts);
         if (capture_cmd->parsed()) return run_capture(capture_args, global, interrupts);
+        if (pose_error_cmd->parsed()) return run_pose_error(pose_error_args, global);
     } catch (const npt::Error& e) {
         print_error(e.what());
         return k_exit_error;

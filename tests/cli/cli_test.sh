@@ -33,7 +33,7 @@ expect_error() {
 # --help mentions every option of each command.
 run --help
 [[ $rc -eq 0 ]] || fail "--help: exit code $rc"
-for opt in --version --verbose --quiet render info train eval view bake import-ngp; do
+for opt in --version --verbose --quiet render info train eval view bake import-ngp pose-error; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt --help does not mention $opt"
 done
 run render --help
@@ -182,6 +182,38 @@ if command -v ffmpeg >/dev/null && command -v colmap >/dev/null; then
     expect_error 1 "clip.mp4: not a video" capture "$tmp/clip.mp4" -o "$tmp/cap2"
     [[ ! -e "$tmp/cap2" ]] || fail "capture of a non-video created its work folder"
 fi
+run pose-error --help
+[[ $rc -eq 0 ]] || fail "pose-error --help: exit code $rc"
+for opt in ESTIMATE REFERENCE --match --known-rate --json Umeyama; do
+    grep -q -- "$opt" "$tmp/out" || fail "nerfpt pose-error --help does not mention $opt"
+done
+# pose-error: bad inputs, then four cameras against a moved and scaled copy of themselves (zero error).
+expect_error 2 "--match" pose-error "$tmp/a.json" "$tmp/b.json" --match fancy
+expect_error 1 "ESTIMATE '.*missing\.json': no such file" pose-error "$tmp/missing.json" "$tmp/b.json"
+expect_error 1 "neither a COLMAP model" pose-error "$tmp/frames" "$tmp/frames"
+expect_error 1 "--known-rate needs --match rate" pose-error "$tmp/frames" "$tmp/frames" --known-rate 10 0
+poses_json() {  # poses_json SCALE OFFSET: cameras at SCALE * corner + OFFSET, identity rotations
+    local s=$1 o=$2 frames="" i=0 c
+    for c in "0 0 0" "1 0 0" "0 1 0" "0 0 1"; do
+        set -- $c
+        frames+="${frames:+,}{\"file_path\": \"images/frame_0000$i.png\", \"transform_matrix\": [[1,0,0,$(($1 * s + o))],[0,1,0,$(($2 * s + o))],[0,0,1,$(($3 * s + o))],[0,0,0,1]]}"
+        i=$((i + 1))
+    done
+    echo "{\"frames\": [$frames]}"
+}
+poses_json 1 0 >"$tmp/a.json"
+poses_json 3 5 >"$tmp/b.json"
+printf '{"frames": [{"file_path": "x.png"}]}' >"$tmp/bad.json"
+expect_error 1 "bad\.json: frame 0 \('x\.png'\): missing 'transform_matrix'" pose-error "$tmp/bad.json" "$tmp/b.json"
+run pose-error "$tmp/a.json" "$tmp/b.json" --json "$tmp/pose_error.json"
+[[ $rc -eq 0 ]] || fail "pose-error: exit code $rc: $(cat "$tmp/err")"
+grep -qE "matched cameras +4" "$tmp/out" || fail "pose-error: table does not say 4 matched: $(cat "$tmp/out")"
+grep -qE "alignment scale +3 " "$tmp/out" || fail "pose-error: alignment scale is not 3: $(cat "$tmp/out")"
+grep -q '"matched": 4' "$tmp/pose_error.json" || fail "pose-error --json: no '\"matched\": 4'"
+expect_error 1 "--known-rate: A must be a positive" pose-error "$tmp/a.json" "$tmp/b.json" --match rate --known-rate 0 1
+run pose-error "$tmp/a.json" "$tmp/b.json" --match rate --known-rate 1 0
+grep -qE "video frame 1\.0000 i \+ 0\.00" "$tmp/out" || fail "pose-error --known-rate: $(cat "$tmp/out" "$tmp/err")"
+grep -qE "matched cameras +4" "$tmp/out" || fail "pose-error --known-rate: not 4 matched: $(cat "$tmp/out")"
 
 if [[ $failures -gt 0 ]]; then
     echo "$failures check(s) failed"
