@@ -211,6 +211,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                 {"registered", s.registered},
                                 {"points", s.points},
                                 {"reprojection_px", s.reprojection_px},
+                                {"path_jumps", s.path_jumps},
                                 {"extraction_seconds", s.seconds[0]},
                                 {"matching_seconds", s.seconds[1]},
                                 {"mapping_seconds", s.seconds[2]},

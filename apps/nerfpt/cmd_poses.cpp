@@ -1,10 +1,12 @@
 #include "cmd_poses.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
 
 #include <filesystem>
 
 #include "capture/colmap_runner.h"
+#include "capture/path_continuity.h"
 #include "capture/transforms_writer.h"
 #include "core/error.h"
 #include "interrupt.h"
@@ -17,7 +19,8 @@ CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
     cmd->footer(
         "Runs the colmap command-line tool (Debian: apt-get install colmap; CPU only) in a work folder:\n"
         "feature_extractor (one OPENCV camera shared by all frames), the sequential matcher (frames of a video,\n"
-        "in name order) or the exhaustive one, and the mapper; keeps the reconstruction with the most frames and\n"
+        "in name order, each with its next 15) or the exhaustive one, and the mapper; keeps the reconstruction\n"
+        "with the most frames, warns when the camera path leaps between neighbouring frames, and\n"
         "writes transforms.json as instant-ngp's colmap2nerf does: OpenGL cameras, the average camera up turned\n"
         "to +Z, the point the cameras look at moved to the origin, the mean camera distance scaled to 4,\n"
         "aabb_scale 16 (docs/formats.md). Fails without writing when fewer than --min-registered of the frames\n"
@@ -70,6 +73,20 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
             "COLMAP registered only {} of {} frames (--min-registered {}): try --matcher exhaustive, curate "
             "more or sharper frames (nerfpt curate --target-frames), or film with more overlap; the model is in {}",
             registered, run.frames, args.min_registered, run.model_folder.string()));
+    // Poses from a video must form a path; a leap between neighbouring frames is a misplaced piece.
+    const std::vector<capture::PathJump> jumps = capture::find_path_jumps(run.model);
+    if (!jumps.empty()) {
+        std::string list;
+        for (size_t i = 0; i < jumps.size() && i < 4; ++i)
+            list += fmt::format("{}{} -> {} ({:.0f}x the median step)", i ? ", " : "", jumps[i].from, jumps[i].to,
+                                jumps[i].ratio);
+        spdlog::warn("the camera path jumps {} time{} between neighbouring frames: {}{}. For frames of one video "
+                     "this means COLMAP matched look-alike views from different sides (a symmetric object, a "
+                     "repeating floor) and placed part of the video wrongly; keep --matcher sequential (it "
+                     "matches neighbouring frames only), curate more frames (--target-frames) so that "
+                     "neighbours overlap more, or film more of the surroundings",
+                     jumps.size(), jumps.size() == 1 ? "" : "s", list, jumps.size() > 4 ? ", ..." : "");
+    }
     capture::TransformsSettings ts;
     ts.images_folder = fs::absolute(args.frames);
     ts.aabb_scale = args.aabb_scale;
@@ -83,6 +100,7 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
     summary.registered = registered;
     summary.points = run.model.points.size();
     summary.reprojection_px = rep.mean_px;
+    summary.path_jumps = jumps.size();
     for (int i = 0; i < 3; ++i) summary.seconds[i] = run.seconds[i];
     return summary;
 }

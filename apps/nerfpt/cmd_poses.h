@@ -26,6 +26,7 @@ int run_poses(const PosesArgs& args, const GlobalSettings& global, InterruptGuar
 struct PosesSummary {
     size_t frames = 0, registered = 0, points = 0;
     double reprojection_px = 0;
+    size_t path_jumps = 0;  // capture/path_continuity.h
     double seconds[3] = {0, 0, 0};  // extraction, matching, mapping
 };
 // The stage itself (COLMAP, checks, transforms.json), printing as `nerfpt poses` does.

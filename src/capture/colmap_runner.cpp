@@ -102,14 +102,21 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
         const char* log;
         std::vector<std::string> argv;
     };
+    std::vector<std::string> matching = {s.colmap, s.matcher + "_matcher", "--database_path", db.string(),
+                                         "--SiftMatching.use_gpu", gpu};
+    if (s.matcher == "sequential") {
+        for (const std::string& a : {std::string("--SequentialMatching.overlap"), std::to_string(s.sequential_overlap),
+                                     std::string("--SequentialMatching.quadratic_overlap"),
+                                     std::string(s.quadratic_overlap ? "1" : "0")})
+            matching.push_back(a);
+    }
     const std::vector<Step> steps = {
         {"feature extraction", "feature_extractor.log",
          {s.colmap, "feature_extractor", "--database_path", db.string(), "--image_path", frames.string(),
           "--image_list_path", list.string(),
           "--ImageReader.single_camera", "1", "--ImageReader.camera_model", s.camera_model,
           "--SiftExtraction.use_gpu", gpu, "--SiftExtraction.max_image_size", std::to_string(s.max_image_size)}},
-        {"matching", "matcher.log",
-         {s.colmap, s.matcher + "_matcher", "--database_path", db.string(), "--SiftMatching.use_gpu", gpu}},
+        {"matching", "matcher.log", matching},
         {"mapping", "mapper.log",
          {s.colmap, "mapper", "--database_path", db.string(), "--image_path", frames.string(), "--output_path",
           (work / "sparse").string(), "--image_list_path", list.string()}},

@@ -16,6 +16,12 @@ struct ColmapSettings {
     std::string camera_model = "OPENCV";      // as instant-ngp's colmap2nerf uses
     int max_image_size = 1600;                // SIFT on larger frames costs time and adds little
     std::string colmap = "colmap";            // the executable, found on PATH
+    // Sequential matcher: each frame is matched with the next `sequential_overlap` ones. COLMAP's quadratic
+    // overlap (also frames i + 2^k) is off: on the beer video its far pairs matched the can's and the floor's
+    // look-alike sides and the mapper placed three stretches of the video on the wrong side of the object
+    // (docs/benchmarks.md); neighbours alone give one continuous path.
+    int sequential_overlap = 15;
+    bool quadratic_overlap = false;
 };
 
 struct ColmapRun {

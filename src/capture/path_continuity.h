@@ -1,0 +1,24 @@
+// A sanity check on poses from a video that the reprojection error cannot give: the camera moves a little
+// between neighbouring frames, so a camera centre that leaps across the scene between two frames in name
+// (= time) order means COLMAP placed part of the video wrongly — typically a symmetric object or a repeating
+// floor matched to the wrong side. Such a model can still reproject to well under a pixel.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "capture/colmap_model.h"
+
+namespace npt::capture {
+
+struct PathJump {
+    std::string from, to;  // image names, consecutive in name order
+    double step = 0;       // distance between their centres
+    double ratio = 0;      // step / the median step
+};
+
+// Consecutive registered images (sorted by name) whose centres are more than `factor` times the median step
+// apart. Empty for fewer than 3 images.
+std::vector<PathJump> find_path_jumps(const ColmapModel& model, double factor = 8.0);
+
+}  // namespace npt::capture
