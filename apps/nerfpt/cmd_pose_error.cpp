@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/temp_file.h"
 #include "input_checks.h"
+#include "pose_error_pieces.h"
 
 namespace npt::cli {
 namespace fs = std::filesystem;
@@ -38,6 +39,11 @@ CLI::App* add_pose_error_command(CLI::App& app, PoseErrorArgs& args) {
         "and the estimate is interpolated at each reference frame (docs/formats.md, 'Comparing poses'); "
         "give\n"
         "them with --known-rate when the extraction is known (ffmpeg -vf fps=3 on a 30 fps video: 10 0).\n"
+        "--pieces: the reference, in name order, is cut into continuous pieces where its camera path\n"
+        "leaps between neighbouring images (a step over 8 times the median step), and each piece with 3\n"
+        "or more matched cameras is aligned by its own similarity: after the global table, one row per\n"
+        "piece (rotation median and max in degrees, centre median and max in % of that piece's\n"
+        "trajectory scale, the piece's alignment scale).\n"
         "Example: nerfpt pose-error out/beer/transforms.json ../shared/data/captures/beer/sparse/0 --match "
         "rate");
     cmd->add_option("ESTIMATE", args.estimate, "Poses to judge: transforms.json or COLMAP model folder")
@@ -51,6 +57,8 @@ CLI::App* add_pose_error_command(CLI::App& app, PoseErrorArgs& args) {
            "With --match rate: reference frame i is video frame A i + B; use these instead of searching")
         ->expected(2)
         ->type_name("A B");
+    cmd->add_flag("--pieces", args.pieces,
+                  "Also align and compare each continuous piece of the reference's camera path alone");
     cmd->add_option("--json", args.json, "Also write the numbers and per-camera errors to this JSON file");
     return cmd;
 }
@@ -146,6 +154,11 @@ int run_pose_error(const PoseErrorArgs& args, const GlobalSettings& global) {
     fmt::print("centre error (%)      {:>10.3f} {:>10.3f} {:>10.3f}  of the trajectory scale {:.4g}\n",
                c.centre.mean * rel, c.centre.median * rel, c.centre.max * rel, c.trajectory_scale);
     fmt::print("alignment scale       {:.6g} (estimate units to reference units)\n", c.similarity.scale);
+    std::vector<PieceComparison> pieces;
+    if (args.pieces) {
+        pieces = compare_pieces(reference, matched);
+        print_pieces(pieces);
+    }
 
     if (!args.json.empty()) {
         nlohmann::json cameras = nlohmann::json::array();
@@ -174,6 +187,7 @@ int run_pose_error(const PoseErrorArgs& args, const GlobalSettings& global) {
              {{"scale", c.similarity.scale}, {"rotation", rotation}, {"translation", {t[0], t[1], t[2]}}}},
             {"cameras", cameras}};
         if (mapping) j["rate"] = {{"a", mapping->a}, {"b", mapping->b}};
+        if (args.pieces) j["pieces"] = pieces_json(pieces);
         write_text_atomic(args.json, j.dump(2) + "\n");
         if (!global.quiet) fmt::print("wrote {}\n", args.json);
     }

@@ -16,6 +16,7 @@ struct PoseErrorArgs {
     std::string match = "name";
     std::string json;                // empty: no report file
     std::vector<double> known_rate;  // {a, b} with --match rate: no search
+    bool pieces = false;             // also align each continuous piece of the reference alone
 };
 
 CLI::App* add_pose_error_command(CLI::App& app, PoseErrorArgs& args);

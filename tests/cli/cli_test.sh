@@ -184,7 +184,7 @@ if command -v ffmpeg >/dev/null && command -v colmap >/dev/null; then
 fi
 run pose-error --help
 [[ $rc -eq 0 ]] || fail "pose-error --help: exit code $rc"
-for opt in ESTIMATE REFERENCE --match --known-rate --json Umeyama; do
+for opt in ESTIMATE REFERENCE --match --known-rate --json --pieces Umeyama; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt pose-error --help does not mention $opt"
 done
 # pose-error: bad inputs, then four cameras against a moved and scaled copy of themselves (zero error).
@@ -214,6 +214,27 @@ expect_error 1 "--known-rate: A must be a positive" pose-error "$tmp/a.json" "$t
 run pose-error "$tmp/a.json" "$tmp/b.json" --match rate --known-rate 1 0
 grep -qE "video frame 1\.0000 i \+ 0\.00" "$tmp/out" || fail "pose-error --known-rate: $(cat "$tmp/out" "$tmp/err")"
 grep -qE "matched cameras +4" "$tmp/out" || fail "pose-error --known-rate: not 4 matched: $(cat "$tmp/out")"
+# --pieces: a reference whose path leaps once (between frames 3 and 4), and an estimate whose second piece sits
+# elsewhere: the global fit is off, each piece on its own fits exactly.
+pieces_json() {  # pieces_json X Y: the second piece moved by (X, Y, 0)
+    local dx=$1 dy=$2 frames="" i=0 c
+    for c in "0 0 0" "1 0 0" "1 1 0" "1 1 1" "100 0 0" "101 0 0" "101 1 0" "101 1 1"; do
+        set -- $c
+        if [[ $i -ge 4 ]]; then set -- $(($1 + dx)) $(($2 + dy)) $3; fi
+        frames+="${frames:+,}{\"file_path\": \"frame_0000$i.png\", \"transform_matrix\": [[1,0,0,$1],[0,1,0,$2],[0,0,1,$3],[0,0,0,1]]}"
+        i=$((i + 1))
+    done
+    echo "{\"frames\": [$frames]}"
+}
+pieces_json 0 0 >"$tmp/ref_pieces.json"
+pieces_json -90 40 >"$tmp/est_pieces.json"
+run pose-error "$tmp/est_pieces.json" "$tmp/ref_pieces.json" --pieces --json "$tmp/pieces.json"
+[[ $rc -eq 0 ]] || fail "pose-error --pieces: exit code $rc: $(cat "$tmp/err")"
+grep -qE "^frame_00000\.png\.\.frame_00003\.png +4 +0\.000 +0\.000 +0\.000 +0\.000 +1 *$" "$tmp/out" ||
+    fail "pose-error --pieces: no exact row for the first piece: $(cat "$tmp/out")"
+grep -qE "^frame_00004\.png\.\.frame_00007\.png +4 +0\.000 +0\.000 +0\.000 +0\.000 +1 *$" "$tmp/out" ||
+    fail "pose-error --pieces: no exact row for the second piece: $(cat "$tmp/out")"
+grep -q '"pieces"' "$tmp/pieces.json" || fail "pose-error --pieces --json: no 'pieces'"
 
 if [[ $failures -gt 0 ]]; then
     echo "$failures check(s) failed"
