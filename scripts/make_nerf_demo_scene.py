@@ -8,11 +8,16 @@ with local axes = the training world's axes. lego's world is Z-up, so the cube i
 (local +Z -> scene +Y) and yawed to show the model at an angle. With no crop the cube spans lego's whole
 aabb (world +-0.5/0.33 = +-1.515); lego's lowest point is at world z ~ -0.35, i.e. local z = -0.35/1.515.
 
-Usage: python3 scripts/make_nerf_demo_scene.py [OUT.gltf [VOLUME_FILE]]
+Usage: python3 scripts/make_nerf_demo_scene.py [OUT.gltf [VOLUME_FILE]] [--crop X0,Y0,Z0,X1,Y1,Z1]
+           [--bottom LOCAL_Z] [--cube-scale S] [--yaw DEG]
 VOLUME_FILE (default lego.npt, relative to OUT's folder) may also be a grid baked with `nerfpt bake`: grid
 densities are per world unit, so the scene then sets density_scale = 1 / CUBE_SCALE to keep the baked object
 as opaque as the model queried directly (whose sigma is per model unit, independent of the node's scale).
+Another model (a capture) is placed with --crop (model space, the part of the model that fills the cube: the
+object without its surroundings), --bottom (the object's lowest point in the cube's local z, -1..1, so that it
+stands on the pedestal), --cube-scale and --yaw.
 """
+import argparse
 import base64
 import json
 import math
@@ -37,11 +42,23 @@ def quat_mul(a, b):
 
 def main():
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(root, "out", "nerf_demo", "scene.gltf")
-    volume_file = sys.argv[2] if len(sys.argv) > 2 else "lego.npt"
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("out", nargs="?", default=os.path.join(root, "out", "nerf_demo", "scene.gltf"))
+    ap.add_argument("volume_file", nargs="?", default="lego.npt")
+    ap.add_argument("--crop", help="X0,Y0,Z0,X1,Y1,Z1 in model space (default: the whole model)")
+    ap.add_argument("--bottom", type=float, default=LEGO_BOTTOM_LOCAL, help="the object's lowest local z")
+    ap.add_argument("--cube-scale", type=float, default=CUBE_SCALE, help="scene units per local unit")
+    ap.add_argument("--yaw", type=float, default=-30.0, help="turn about the vertical, degrees")
+    args = ap.parse_args()
+    out, volume_file, cube_scale = args.out, args.volume_file, args.cube_scale
     volume = {"file": volume_file}
+    if args.crop:
+        c = [float(v) for v in args.crop.split(",")]
+        if len(c) != 6 or any(c[i] >= c[i + 3] for i in range(3)):
+            ap.error("--crop: expected X0,Y0,Z0,X1,Y1,Z1 with X0 < X1, Y0 < Y1, Z0 < Z1")
+        volume["crop"] = {"min": c[:3], "max": c[3:]}
     if not volume_file.endswith(".npt"):
-        volume["density_scale"] = round(1.0 / CUBE_SCALE, 6)
+        volume["density_scale"] = round(1.0 / cube_scale, 6)
     b = Builder()
 
     def pbr(name, color, metallic=0.0, roughness=1.0, **extra):
@@ -94,11 +111,11 @@ def main():
              {"translation": [PEDESTAL_AT[0], PEDESTAL_HALF[1], PEDESTAL_AT[2]], "scale": PEDESTAL_HALF})
     add_mesh("mirror_sphere", sphere(1.0), "mirror", {"translation": [0.42, 0.3, 0.05], "scale": [0.3, 0.3, 0.3]})
     stand_up = [-math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4)]  # -90 degrees about X
-    yaw = math.radians(-30)
+    yaw = math.radians(args.yaw)
     rotation = quat_mul([0.0, math.sin(yaw / 2), 0.0, math.cos(yaw / 2)], stand_up)
     add_mesh("lego", box(1.0), "volume",
-             {"translation": [PEDESTAL_AT[0], ped_top - LEGO_BOTTOM_LOCAL * CUBE_SCALE, PEDESTAL_AT[2]],
-              "rotation": rnd(rotation), "scale": [CUBE_SCALE] * 3,
+             {"translation": [PEDESTAL_AT[0], ped_top - args.bottom * cube_scale, PEDESTAL_AT[2]],
+              "rotation": rnd(rotation), "scale": [cube_scale] * 3,
               "extras": {"volume": volume}})
     nodes.append({"name": "camera", "translation": [0.0, 1.0, 3.9], "camera": 0})
 

@@ -30,7 +30,7 @@ struct CaptureArgs {
     int downscale = 0;         // 0: automatic, longest side at most k_auto_train_side
     std::string config;
     // turntable
-    int turntable_frames = 120;  // 0: none
+    int turntable_frames = 60;  // 0: none (2 s at 30 fps: CPU rendering of a capture is slow)
     std::string turntable_res;   // empty: the training image size
     int threads = 0;
     bool force = false;
