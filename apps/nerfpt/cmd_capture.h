@@ -25,7 +25,7 @@ struct CaptureArgs {
     double min_registered = 0.5;
     // split, train, eval
     int holdout_every = 8;  // 0: train on every frame, no held-out PSNR
-    double train_seconds = 300;
+    double train_seconds = 600;
     uint64_t train_steps = 0;  // 0: --train-time decides
     int downscale = 0;         // 0: automatic, longest side at most k_auto_train_side
     std::string config;

@@ -25,8 +25,9 @@ public:
     size_t cell_count() const { return m_density.size(); }
     OccupancyGridView view() const { return {m_occupied.data(), m_cascades, m_resolution}; }
 
-    // Cells to re-estimate at training step `update_index` (the how-many'th update): all cells while
-    // update_index * interval < warmup_steps, else a random quarter, plus as many random occupied cells (as
+    // Cells to re-estimate at update number `update_index`: while update_index * interval < warmup_steps,
+    // every cascades-th cell starting at update_index mod cascades (all cells over that many updates; all of
+    // them each time for one cascade); later a random quarter, plus as many random occupied cells (as
     // instant-ngp). For each, a uniformly random position inside the cell, in model space.
     void plan_update(const OccupancyConfig& cfg, int update_index, Pcg32& rng, std::vector<uint32_t>& cells,
                      std::vector<Vec3>& positions) const;

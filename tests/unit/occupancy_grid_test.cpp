@@ -56,17 +56,24 @@ TEST(Occupancy, CascadesForAabbScaleRejectsBadScales) {
     EXPECT_THROW(cascades_for_aabb_scale(256.0f), Error);
 }
 
-TEST(Occupancy, WarmupPlansEveryCellThenAQuarterPlusOccupied) {
+TEST(Occupancy, WarmupPlansEveryCellOncePerCascadeCountUpdatesThenAQuarterPlusOccupied) {
     OccupancyGrid g(2, 8);
     const OccupancyConfig cfg = small_config(8);
     const uint32_t n = uint32_t(g.cell_count());
     Pcg32 rng(1, 2);
     std::vector<uint32_t> cells;
     std::vector<Vec3> pos;
-    g.plan_update(cfg, 15, rng, cells, pos);  // 15 * 16 < 256: still warm-up
-    ASSERT_EQ(cells.size(), n);
-    ASSERT_EQ(pos.size(), n);
-    for (uint32_t i = 0; i < n; ++i) ASSERT_EQ(cells[i], i);
+    std::vector<int> times_planned(n, 0);
+    for (int update = 14; update < 16; ++update) {  // 15 * 16 < 256: still warm-up; two cascades, two turns
+        g.plan_update(cfg, update, rng, cells, pos);
+        ASSERT_EQ(cells.size(), n / 2);
+        ASSERT_EQ(pos.size(), cells.size());
+        for (uint32_t c : cells) ++times_planned[c];
+    }
+    for (uint32_t i = 0; i < n; ++i) ASSERT_EQ(times_planned[i], 1) << "cell " << i;
+    OccupancyGrid one(1, 8);  // one cascade: every cell every time, as instant-ngp
+    one.plan_update(cfg, 15, rng, cells, pos);
+    ASSERT_EQ(cells.size(), one.cell_count());
 
     // Leave only the cells of cascade 0 with x < 2 occupied, then plan a post-warm-up update.
     std::vector<float> density(n, 0.0f);
