@@ -74,6 +74,17 @@ int auto_downscale(int width, int height) {
     return std::max(1, (side + k_auto_train_side - 1) / k_auto_train_side);
 }
 
+// A stage before training that runs again (new frames, poses or split) makes the model and what was rendered
+// from it stale: they go, so that training starts over instead of resuming a model of other data.
+void discard_trained(const fs::path& work, CaptureRecord& record) {
+    for (const char* name : {"model.npt", "eval", "turntable.mp4"}) {
+        std::error_code ec;
+        fs::remove_all(work / name, ec);
+        if (ec) throw Error((work / name).string() + ": cannot remove (" + ec.message() + ")");
+    }
+    record.forget_from("train");
+}
+
 nlohmann::json read_json_file(const fs::path& path) {
     std::ifstream in(path);
     if (!in) throw Error(path.string() + ": cannot read");
@@ -176,6 +187,8 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         banner(global, 1, "curate: done in an earlier run (frames/)");
     } else {
         banner(global, 1, "curate: choosing frames");
+        record.forget_from("poses");  // new frames: every later stage runs again
+        discard_trained(work, record);
         CurateArgs c;
         c.video = args.video;
         c.output = frames.string();
@@ -198,6 +211,8 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         banner(global, 2, "poses: done in an earlier run (transforms.json)");
     } else {
         banner(global, 2, "poses: COLMAP");
+        record.forget_from("split");
+        discard_trained(work, record);
         PosesArgs p;
         p.frames = frames.string();
         p.output = transforms.string();
@@ -226,12 +241,12 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         banner(global, 3, fmt::format("split: holding out every {}th frame", args.holdout_every));
         const capture::SplitCounts n = capture::split_transforms(transforms, args.holdout_every);
         if (!global.quiet) fmt::print("{} training frames, {} held out\n", n.train, n.test);
-        record.forget_from("train");  // a different split invalidates the model trained on the old one
+        discard_trained(work, record);  // a model trained on another split has seen the held-out frames
         record.finish("split", {{"every", args.holdout_every}, {"train", n.train}, {"test", n.test}});
     } else {
         banner(global, 3, "split: none (--holdout-every 0), training on every frame");
         for (const char* name : {"transforms_train.json", "transforms_test.json"}) fs::remove(work / name);
-        record.forget_from("train");
+        discard_trained(work, record);
         record.finish("split", {{"every", 0}, {"train", record.stage("poses").value("registered", 0)}, {"test", 0}});
     }
 

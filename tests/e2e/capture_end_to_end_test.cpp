@@ -52,6 +52,18 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     EXPECT_NO_THROW(nerf::load_model(work / "model.npt"));
     EXPECT_TRUE(fs::exists(work / "report.md"));
 
+    // The same command again finds every stage done and changes nothing.
+    const auto model_time = fs::last_write_time(work / "model.npt");
+    const int rerun = run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames",
+                               "48", "--aabb-scale", "4", "--train-steps", "20", "--downscale", "4",
+                               "--turntable-frames", "4"},
+                              dir / "rerun.log");
+    ASSERT_EQ(rerun, 0) << read_text(dir / "rerun.log");
+    const std::string rerun_log = read_text(dir / "rerun.log");
+    for (const char* stage : {"curate", "poses", "split", "train", "eval", "turntable"})
+        EXPECT_NE(rerun_log.find(std::string(stage) + ": done in an earlier run"), std::string::npos) << rerun_log;
+    EXPECT_EQ(fs::last_write_time(work / "model.npt"), model_time);
+
     const auto estimate = capture::read_transforms_poses(work / "transforms.json");
     const auto truth = capture::read_transforms_poses(dir / "truth.json");
     const capture::MatchedPoses matched = capture::match_by_name(estimate, truth);
