@@ -109,8 +109,9 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         "  6 turntable  -> turntable.mp4, an orbit at the capture's camera distance, height and field of view\n"
         "and writes capture.json (every stage's numbers) and report.md after each stage. Run the same command\n"
         "again after an error or Ctrl-C and it continues with the first unfinished stage (training resumes from\n"
-        "its last checkpoint); a larger --train-time continues training and redoes eval and turntable; --force\n"
-        "starts over. Needs ffmpeg and colmap on PATH (Debian: apt-get install ffmpeg colmap).\n"
+        "its last checkpoint); a larger --train-time continues training and redoes eval and turntable, another\n"
+        "--holdout-every redoes the split and retrains; curate and poses options take effect with --force,\n"
+        "which starts over. Needs ffmpeg and colmap on PATH (Debian: apt-get install ffmpeg colmap).\n"
         "Example: nerfpt capture Beer.mp4 -o beer --train-time 600");
     cmd->add_option("VIDEO", args.video, "Video walking around the object (anything ffmpeg decodes)")->required();
     cmd->add_option("-o,--output", args.output, "Work folder (created if missing)")->required();
