@@ -88,12 +88,12 @@ std::string capture_report_markdown(const nlohmann::json& record) {
     }
     if (const auto p = get("poses"); !p.empty()) {
         md += fmt::format(
-            "| poses | COLMAP registered {} of {} frames, {} points, mean reprojection error {:.3f} px, {} jumps "
+            "| poses | COLMAP registered {} of {} frames, {} points, mean reprojection error {:.3f} px, {} "
+            "jumps "
             "in the camera path | {:.1f} s (extraction {:.1f}, matching {:.1f}, mapping {:.1f}) |\n",
             p.value("registered", 0), p.value("frames", 0), p.value("points", 0), num(p, "reprojection_px"),
-            p.value("path_jumps", 0),
-            num(p, "seconds"), num(p, "extraction_seconds"), num(p, "matching_seconds"),
-            num(p, "mapping_seconds"));
+            p.value("path_jumps", 0), num(p, "seconds"), num(p, "extraction_seconds"),
+            num(p, "matching_seconds"), num(p, "mapping_seconds"));
         total += num(p, "seconds");
     }
     if (const auto s = get("split"); !s.empty())
@@ -101,7 +101,8 @@ std::string capture_report_markdown(const nlohmann::json& record) {
                           s.value("test", 0), s.value("every", 0));
     if (const auto t = get("train"); !t.empty()) {
         md += fmt::format("| train | {} steps at {}x{} (downscale {}) | {:.1f} s |\n", t.value("steps", 0),
-                          t.value("width", 0), t.value("height", 0), t.value("downscale", 0), num(t, "seconds"));
+                          t.value("width", 0), t.value("height", 0), t.value("downscale", 0),
+                          num(t, "seconds"));
         total += num(t, "seconds");
     }
     if (const auto e = get("eval"); !e.empty()) {
@@ -114,9 +115,10 @@ std::string capture_report_markdown(const nlohmann::json& record) {
                           v.value("frames", 0), v.value("width", 0), v.value("height", 0), num(v, "seconds"));
         total += num(v, "seconds");
     }
-    md += fmt::format("\nTotal: {:.1f} s. The model is model.npt; `nerfpt info model.npt` says where its content "
-                      "lies, to place it in a scene.\n",
-                      total);
+    md += fmt::format(
+        "\nTotal: {:.1f} s. The model is model.npt; `nerfpt info model.npt` says where its content "
+        "lies, to place it in a scene.\n",
+        total);
     return md;
 }
 

@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -38,10 +38,9 @@ constexpr int k_auto_train_side = 400;
 constexpr int k_stages = 6;
 
 // What `--force` removes: only what capture itself writes, never the whole folder.
-const std::vector<std::string> k_outputs = {"frames",      "colmap",       "transforms.json",
-                                            "transforms_train.json",       "transforms_test.json",
-                                            "model.npt",   "eval",         "turntable.mp4",
-                                            "capture.json", "report.md"};
+const std::vector<std::string> k_outputs = {
+    "frames",    "colmap", "transforms.json", "transforms_train.json", "transforms_test.json",
+    "model.npt", "eval",   "turntable.mp4",   "capture.json",          "report.md"};
 
 class Clock {
   public:
@@ -64,9 +63,10 @@ void require_tools() {
     for (const char* tool : {"ffmpeg", "ffprobe", "colmap"})
         if (find_executable(tool).empty()) missing.push_back(tool);
     if (!missing.empty())
-        throw Error(fmt::format("{} not found on PATH: nerfpt capture needs them (Debian: apt-get install ffmpeg "
-                                "colmap)",
-                                fmt::join(missing, ", ")));
+        throw Error(
+            fmt::format("{} not found on PATH: nerfpt capture needs them (Debian: apt-get install ffmpeg "
+                        "colmap)",
+                        fmt::join(missing, ", ")));
 }
 
 int auto_downscale(int width, int height) {
@@ -98,27 +98,35 @@ nlohmann::json read_json_file(const fs::path& path) {
 }  // namespace
 
 CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
-    CLI::App* cmd = app.add_subcommand("capture", "A phone video to a trained NeRF: curate, poses, train, report");
+    CLI::App* cmd =
+        app.add_subcommand("capture", "A phone video to a trained NeRF: curate, poses, train, report");
     cmd->footer(
         "Runs, in WORKDIR:\n"
         "  1 curate     VIDEO -> frames/ (nerfpt curate: sharpest frame per time window, subject check)\n"
         "  2 poses      frames/ -> transforms.json (nerfpt poses: COLMAP, one shared OPENCV camera)\n"
-        "  3 split      every --holdout-every'th frame -> transforms_test.json, the rest -> transforms_train.json\n"
+        "  3 split      every --holdout-every'th frame -> transforms_test.json, the rest -> "
+        "transforms_train.json\n"
         "  4 train      -> model.npt (nerfpt train on the training frames, --train-time seconds)\n"
         "  5 eval       PSNR/SSIM on the held-out frames -> eval/ (renders, comparisons, metrics.json)\n"
-        "  6 turntable  -> turntable.mp4, an orbit at the capture's camera distance, height and field of view\n"
-        "and writes capture.json (every stage's numbers) and report.md after each stage. Run the same command\n"
-        "again after an error or Ctrl-C and it continues with the first unfinished stage (training resumes from\n"
-        "its last checkpoint); a larger --train-time continues training and redoes eval and turntable, another\n"
+        "  6 turntable  -> turntable.mp4, an orbit at the capture's camera distance, height and field of "
+        "view\n"
+        "and writes capture.json (every stage's numbers) and report.md after each stage. Run the same "
+        "command\n"
+        "again after an error or Ctrl-C and it continues with the first unfinished stage (training resumes "
+        "from\n"
+        "its last checkpoint); a larger --train-time continues training and redoes eval and turntable, "
+        "another\n"
         "--holdout-every redoes the split and retrains; curate and poses options take effect with --force,\n"
         "which starts over. Needs ffmpeg and colmap on PATH (Debian: apt-get install ffmpeg colmap).\n"
         "Example: nerfpt capture Beer.mp4 -o beer --train-time 600");
-    cmd->add_option("VIDEO", args.video, "Video walking around the object (anything ffmpeg decodes)")->required();
+    cmd->add_option("VIDEO", args.video, "Video walking around the object (anything ffmpeg decodes)")
+        ->required();
     cmd->add_option("-o,--output", args.output, "Work folder (created if missing)")->required();
     cmd->add_option("--target-frames", args.target_frames, "curate: frames to keep, one per time window")
         ->check(CLI::Range(3, 100000))
         ->capture_default_str();
-    cmd->add_option("--max-frames", args.max_frames, "curate: decode at most N frames, evenly spread (0: all)")
+    cmd->add_option("--max-frames", args.max_frames,
+                    "curate: decode at most N frames, evenly spread (0: all)")
         ->check(CLI::NonNegativeNumber);
     auto* hmin = cmd->add_option("--hsv-min", args.hsv_min, "curate: subject colour, lower bound H,S,V");
     auto* hmax = cmd->add_option("--hsv-max", args.hsv_max, "curate: subject colour, upper bound H,S,V");
@@ -153,10 +161,12 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
     cmd->add_option("--turntable-frames", args.turntable_frames, "Frames of the turntable video (0: none)")
         ->check(CLI::Range(0, 100000))
         ->capture_default_str();
-    cmd->add_option("--turntable-res", args.turntable_res, "WIDTHxHEIGHT of the turntable (default: the training size)");
+    cmd->add_option("--turntable-res", args.turntable_res,
+                    "WIDTHxHEIGHT of the turntable (default: the training size)");
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads")
         ->check(CLI::Range(0, 4096));
-    cmd->add_flag("--force", args.force, "Remove what an earlier capture wrote in the work folder, start over");
+    cmd->add_flag("--force", args.force,
+                  "Remove what an earlier capture wrote in the work folder, start over");
     return cmd;
 }
 
@@ -168,7 +178,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
     // A file ffmpeg cannot read fails here, before the work folder is made.
     const capture::VideoInfo info = capture::probe_video(args.video);
     spdlog::debug("{}: {}x{}, {} frames at {:.2f} fps", args.video, info.width, info.height, info.frame_count,
-                 info.fps);
+                  info.fps);
     const fs::path work = args.output;
     prepare_output_folder(work, "--output");
     if (args.force) {
@@ -179,9 +189,10 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         }
     }
     CaptureRecord record(work, args.video);
-    const fs::path frames = work / "frames", transforms = work / "transforms.json", model = work / "model.npt";
-    const std::string continue_hint = fmt::format("the same 'nerfpt capture {} -o {} ...' command", args.video,
-                                                  args.output);
+    const fs::path frames = work / "frames", transforms = work / "transforms.json",
+                   model = work / "model.npt";
+    const std::string continue_hint =
+        fmt::format("the same 'nerfpt capture {} -o {} ...' command", args.video, args.output);
 
     // 1 curate
     if (record.done("curate")) {
@@ -248,23 +259,26 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         banner(global, 3, "split: none (--holdout-every 0), training on every frame");
         for (const char* name : {"transforms_train.json", "transforms_test.json"}) fs::remove(work / name);
         discard_trained(work, record);
-        record.finish("split", {{"every", 0}, {"train", record.stage("poses").value("registered", 0)}, {"test", 0}});
+        record.finish("split",
+                      {{"every", 0}, {"train", record.stage("poses").value("registered", 0)}, {"test", 0}});
     }
 
     // 4 train
     const capture::RigSummary rig = capture::summarize_rig(transforms);
     const int downscale = args.downscale > 0 ? args.downscale : auto_downscale(rig.width, rig.height);
     const double target_seconds = args.train_steps ? 0.0 : args.train_seconds;
-    const nlohmann::json train_target = {{"steps", args.train_steps}, {"time", target_seconds}, {"downscale", downscale}};
+    const nlohmann::json train_target = {
+        {"steps", args.train_steps}, {"time", target_seconds}, {"downscale", downscale}};
     std::error_code ec;
     if (record.done("train") && record.stage("train").value("target", nlohmann::json()) == train_target &&
         fs::exists(model, ec)) {
         banner(global, 4, "train: done in an earlier run (model.npt)");
     } else {
         const bool resume = fs::exists(model, ec);
-        banner(global, 4, fmt::format("train: {}{}", resume ? "continuing model.npt to " : "",
-                                      args.train_steps ? fmt::format("{} steps", args.train_steps)
-                                                       : fmt::format("{:.0f} s", args.train_seconds)));
+        banner(global, 4,
+               fmt::format("train: {}{}", resume ? "continuing model.npt to " : "",
+                           args.train_steps ? fmt::format("{} steps", args.train_steps)
+                                            : fmt::format("{:.0f} s", args.train_seconds)));
         record.forget_from("train");
         TrainArgs t;
         t.data = work.string();

@@ -31,7 +31,7 @@ struct CaptureArgs {
     std::string config;
     // turntable
     int turntable_frames = 60;  // 0: none (2 s at 30 fps: CPU rendering of a capture is slow)
-    std::string turntable_res;   // empty: the training image size
+    std::string turntable_res;  // empty: the training image size
     int threads = 0;
     bool force = false;
 };

@@ -66,11 +66,13 @@ RigSummary summarize_rig(const fs::path& json) {
         }
         const double d = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
         distances.push_back(d);
-        elevations.push_back(d > 0 ? std::asin(std::clamp(p[2] / d, -1.0, 1.0)) * 180.0 / std::numbers::pi : 0);
+        elevations.push_back(d > 0 ? std::asin(std::clamp(p[2] / d, -1.0, 1.0)) * 180.0 / std::numbers::pi
+                                   : 0);
         if (i == 0) {
             rig.width = int(number_field(fr, root, "w", where));
             rig.height = int(number_field(fr, root, "h", where));
-            if (rig.width <= 0 || rig.height <= 0) throw Error(where + ": 'w'/'h': the image size is missing");
+            if (rig.width <= 0 || rig.height <= 0)
+                throw Error(where + ": 'w'/'h': the image size is missing");
             const double fl_x = number_field(fr, root, "fl_x", where);
             const double angle_x = number_field(fr, root, "camera_angle_x", where);
             if (fl_x > 0)

@@ -22,7 +22,8 @@ std::string file_path_of(const nlohmann::json& frame) {
 
 SplitCounts split_transforms(const fs::path& json, int every) {
     const std::string where = json.string();
-    if (every < 2) throw Error(where + ": a held-out split needs every >= 2 (got " + std::to_string(every) + ")");
+    if (every < 2)
+        throw Error(where + ": a held-out split needs every >= 2 (got " + std::to_string(every) + ")");
     std::ifstream in(json);
     if (!in) throw Error(where + ": cannot read");
     nlohmann::json root;

@@ -25,7 +25,8 @@ nlohmann::json read_json(const fs::path& p) {
 
 TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     for (const char* tool : {"ffmpeg", "colmap"})
-        if (find_executable(tool).empty()) GTEST_SKIP() << tool << " is not installed (scripts/install_deps.sh)";
+        if (find_executable(tool).empty())
+            GTEST_SKIP() << tool << " is not installed (scripts/install_deps.sh)";
     if (!fs::exists(cli_binary())) GTEST_SKIP() << "the nerfpt binary is not built";
     const fs::path dir = temp_dir();
     TurntableSettings st;  // 96 frames of 320x240 over three rising turns
@@ -36,10 +37,10 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     // (aabb_scale 4: fewer occupancy cascades to fill); their quality is measured on real data in
     // docs/benchmarks.md.
     const fs::path work = dir / "capture";
-    const int rc = run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames",
-                            "48", "--aabb-scale", "4", "--train-steps", "20", "--downscale", "4",
-                            "--turntable-frames", "4"},
-                           dir / "capture.log");
+    const int rc =
+        run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames", "48",
+                 "--aabb-scale", "4", "--train-steps", "20", "--downscale", "4", "--turntable-frames", "4"},
+                dir / "capture.log");
     ASSERT_EQ(rc, 0) << read_text(dir / "capture.log");
 
     const nlohmann::json record = read_json(work / "capture.json");
@@ -54,14 +55,15 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
 
     // The same command again finds every stage done and changes nothing.
     const auto model_time = fs::last_write_time(work / "model.npt");
-    const int rerun = run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames",
-                               "48", "--aabb-scale", "4", "--train-steps", "20", "--downscale", "4",
-                               "--turntable-frames", "4"},
-                              dir / "rerun.log");
+    const int rerun =
+        run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames", "48",
+                 "--aabb-scale", "4", "--train-steps", "20", "--downscale", "4", "--turntable-frames", "4"},
+                dir / "rerun.log");
     ASSERT_EQ(rerun, 0) << read_text(dir / "rerun.log");
     const std::string rerun_log = read_text(dir / "rerun.log");
     for (const char* stage : {"curate", "poses", "split", "train", "eval", "turntable"})
-        EXPECT_NE(rerun_log.find(std::string(stage) + ": done in an earlier run"), std::string::npos) << rerun_log;
+        EXPECT_NE(rerun_log.find(std::string(stage) + ": done in an earlier run"), std::string::npos)
+            << rerun_log;
     EXPECT_EQ(fs::last_write_time(work / "model.npt"), model_time);
 
     const auto estimate = capture::read_transforms_poses(work / "transforms.json");
@@ -70,10 +72,12 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     // COLMAP registers every frame of a textured, sharp, slowly turning scene.
     ASSERT_GE(matched.estimate.size(), 46u) << "registered frames";
     const capture::PoseComparison cmp = capture::compare_poses(matched.estimate, matched.reference);
-    const double rel_median = cmp.centre.median / cmp.trajectory_scale, rel_max = cmp.centre.max / cmp.trajectory_scale;
-    std::printf("poses of %zu frames: rotation error median %.3f max %.3f deg; centre error median %.4f max %.4f "
-                "of the trajectory scale\n",
-                cmp.count, cmp.rotation_deg.median, cmp.rotation_deg.max, rel_median, rel_max);
+    const double rel_median = cmp.centre.median / cmp.trajectory_scale,
+                 rel_max = cmp.centre.max / cmp.trajectory_scale;
+    std::printf(
+        "poses of %zu frames: rotation error median %.3f max %.3f deg; centre error median %.4f max %.4f "
+        "of the trajectory scale\n",
+        cmp.count, cmp.rotation_deg.median, cmp.rotation_deg.max, rel_median, rel_max);
     // Thresholds: SIFT at 320x240 and bundle adjustment deliver 0.2 deg and 0.3% median, 0.4 deg and 0.7%
     // max here (measured, docs/benchmarks.md); the limits leave 2.5-5x room for other COLMAP builds and
     // encoders. A wrong axis convention gives ~180 degrees, a pose paired with its neighbour's ~20 (both
@@ -95,7 +99,8 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     EXPECT_GT(wrong.rotation_deg.median, 5.0);
     EXPECT_GT(wrong.centre.median / wrong.trajectory_scale, 0.05);
     std::printf("controls: OpenCV axes %.1f deg; swapped neighbours %.1f deg, %.3f of the trajectory scale\n",
-                flipped.rotation_deg.median, wrong.rotation_deg.median, wrong.centre.median / wrong.trajectory_scale);
+                flipped.rotation_deg.median, wrong.rotation_deg.median,
+                wrong.centre.median / wrong.trajectory_scale);
 
     // Intrinsics: COLMAP refines the focal length from its 1.2 x width guess to the true one.
     const nlohmann::json tj = read_json(work / "transforms.json");

@@ -24,16 +24,22 @@ const Vec3 k_target{0.0f, 0.5f, 0.0f};  // centre of the box
 
 // HSV (h in degrees, s and v in [0,1]) to sRGB-encoded RGB.
 Rgb hsv_to_rgb(float h, float s, float v) {
-    const float c = v * s, hp = std::fmod(h / 60.0f, 6.0f), x = c * (1.0f - std::fabs(std::fmod(hp, 2.0f) - 1.0f));
-    Rgb rgb = hp < 1 ? Rgb(c, x, 0) : hp < 2 ? Rgb(x, c, 0) : hp < 3 ? Rgb(0, c, x)
-            : hp < 4 ? Rgb(0, x, c) : hp < 5 ? Rgb(x, 0, c) : Rgb(c, 0, x);
+    const float c = v * s, hp = std::fmod(h / 60.0f, 6.0f),
+                x = c * (1.0f - std::fabs(std::fmod(hp, 2.0f) - 1.0f));
+    Rgb rgb = hp < 1   ? Rgb(c, x, 0)
+              : hp < 2 ? Rgb(x, c, 0)
+              : hp < 3 ? Rgb(0, c, x)
+              : hp < 4 ? Rgb(0, x, c)
+              : hp < 5 ? Rgb(x, 0, c)
+                       : Rgb(c, 0, x);
     const float m = v - c;
     return Rgb(rgb.x + m, rgb.y + m, rgb.z + m);
 }
 
 // Random overlapping rectangles, colours from `colour(rng)`: corners everywhere, no repetition.
 template <class ColourFn>
-scene::Texture random_rectangles(const std::string& name, int side, int count, uint32_t seed, ColourFn colour) {
+scene::Texture random_rectangles(const std::string& name, int side, int count, uint32_t seed,
+                                 ColourFn colour) {
     std::mt19937 rng(seed);
     std::vector<Rgb> srgb(size_t(side) * size_t(side), colour(rng));
     std::uniform_int_distribution<int> pos(0, side - 1), size(side / 64, side / 8);
@@ -133,7 +139,8 @@ scene::Scene make_turntable_scene() {
 scene::Camera turntable_camera(const TurntableSettings& st, int frame) {
     const double t = double(frame) / double(st.frames);
     const double azimuth = 2.0 * std::numbers::pi * st.turns * t;
-    const double elevation = (st.elevation_low_deg + (st.elevation_high_deg - st.elevation_low_deg) * t) * k_deg;
+    const double elevation =
+        (st.elevation_low_deg + (st.elevation_high_deg - st.elevation_low_deg) * t) * k_deg;
     scene::Camera cam;
     cam.name = fmt::format("frame_{:05}", frame);
     const Vec3 offset(float(std::cos(elevation) * std::sin(azimuth)), float(std::sin(elevation)),
@@ -173,7 +180,8 @@ void render_turntable_video(const TurntableSettings& st, const fs::path& folder,
     }
     // yuv420p at a high quality: what a phone writes, with mild compression.
     const std::string cmd = fmt::format(
-        "ffmpeg -nostdin -v error -y -framerate {} -i '{}/render_%05d.png' -c:v libx264 -crf 14 -pix_fmt yuv420p "
+        "ffmpeg -nostdin -v error -y -framerate {} -i '{}/render_%05d.png' -c:v libx264 -crf 14 -pix_fmt "
+        "yuv420p "
         "'{}' 2>'{}/ffmpeg.log'",
         st.fps, folder.string(), video.string(), folder.string());
     if (std::system(cmd.c_str()) != 0)
@@ -194,7 +202,8 @@ void write_true_transforms(const TurntableSettings& st, const fs::path& json) {
         const Mat4 m = opengl_camera_to_world(turntable_camera(st, k));
         nlohmann::json rows = nlohmann::json::array();
         for (int r = 0; r < 4; ++r) rows.push_back({m.m[r][0], m.m[r][1], m.m[r][2], m.m[r][3]});
-        root["frames"].push_back({{"file_path", fmt::format("frame_{:05}.png", k)}, {"transform_matrix", rows}});
+        root["frames"].push_back(
+            {{"file_path", fmt::format("frame_{:05}.png", k)}, {"transform_matrix", rows}});
     }
     std::ofstream(json) << root.dump(2) << "\n";
 }

@@ -13,7 +13,8 @@ namespace {
 namespace fs = std::filesystem;
 
 nlohmann::json frame_at(double x, double y, double z) {
-    return {{"file_path", "f.png"}, {"transform_matrix", {{1, 0, 0, x}, {0, 1, 0, y}, {0, 0, 1, z}, {0, 0, 0, 1}}}};
+    return {{"file_path", "f.png"},
+            {"transform_matrix", {{1, 0, 0, x}, {0, 1, 0, y}, {0, 0, 1, z}, {0, 0, 0, 1}}}};
 }
 
 TEST(CameraRig, MediansOfDistanceAndElevationAndTheFieldOfView) {
@@ -21,7 +22,8 @@ TEST(CameraRig, MediansOfDistanceAndElevationAndTheFieldOfView) {
     // Three cameras at distance 4 and elevations 0, 30, 90 deg, one outlier at distance 10: medians 4 and 30.
     const double s30 = std::sin(std::numbers::pi / 6), c30 = std::cos(std::numbers::pi / 6);
     nlohmann::json j = {{"fl_x", 50.0}, {"w", 100}, {"h", 80}};
-    j["frames"] = {frame_at(4, 0, 0), frame_at(0, 4 * c30, 4 * s30), frame_at(0, 0, 4), frame_at(0, 10 * c30, 10 * s30)};
+    j["frames"] = {frame_at(4, 0, 0), frame_at(0, 4 * c30, 4 * s30), frame_at(0, 0, 4),
+                   frame_at(0, 10 * c30, 10 * s30)};
     test::write_file(dir / "t.json", j.dump());
     const RigSummary rig = summarize_rig(dir / "t.json");
     EXPECT_EQ(rig.cameras, 4u);
@@ -42,8 +44,10 @@ TEST(CameraRig, BadInputNamesTheFileAndField) {
     test::expect_error_message([&] { summarize_rig(dir / "none.json"); }, {"none.json", "cannot read"});
     test::write_file(dir / "e.json", R"({"frames": []})");
     test::expect_error_message([&] { summarize_rig(dir / "e.json"); }, {"e.json", "'frames'"});
-    test::write_file(dir / "m.json", R"({"w": 4, "h": 4, "fl_x": 2, "frames": [{"transform_matrix": [[1, 0]]}]})");
-    test::expect_error_message([&] { summarize_rig(dir / "m.json"); }, {"m.json", "frames[0]", "transform_matrix"});
+    test::write_file(dir / "m.json",
+                     R"({"w": 4, "h": 4, "fl_x": 2, "frames": [{"transform_matrix": [[1, 0]]}]})");
+    test::expect_error_message([&] { summarize_rig(dir / "m.json"); },
+                               {"m.json", "frames[0]", "transform_matrix"});
     nlohmann::json j = {{"w", 4}, {"h", 4}};
     j["frames"] = {frame_at(1, 0, 0)};
     test::write_file(dir / "f.json", j.dump());

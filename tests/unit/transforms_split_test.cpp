@@ -17,8 +17,9 @@ nlohmann::json frames_json(int n) {
     root["frames"] = nlohmann::json::array();
     // Written in reverse: the split must follow name order, not file order.
     for (int i = n - 1; i >= 0; --i)
-        root["frames"].push_back({{"file_path", "frames/frame_" + std::to_string(1000 + i) + ".png"},
-                                  {"transform_matrix", {{1, 0, 0, i}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}}});
+        root["frames"].push_back(
+            {{"file_path", "frames/frame_" + std::to_string(1000 + i) + ".png"},
+             {"transform_matrix", {{1, 0, 0, i}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}}});
     return root;
 }
 
@@ -31,7 +32,8 @@ TEST(TransformsSplit, HoldsOutEveryNthFrameInNameOrderAndKeepsTheRest) {
     const fs::path dir = test::temp_dir();
     test::write_file(dir / "transforms.json", frames_json(20).dump());
     const SplitCounts n = split_transforms(dir / "transforms.json", 8);
-    const nlohmann::json train = read(dir / "transforms_train.json"), test_split = read(dir / "transforms_test.json");
+    const nlohmann::json train = read(dir / "transforms_train.json"),
+                         test_split = read(dir / "transforms_test.json");
     // Frames 4 and 12 (every 8th from 8/2 = 4) are held out.
     EXPECT_EQ(n.test, 2u);
     EXPECT_EQ(n.train, 18u);
@@ -57,11 +59,14 @@ TEST(TransformsSplit, FewFramesStillHoldOneOut) {
 
 TEST(TransformsSplit, BadInputIsAOneLineErrorNamingTheFile) {
     const fs::path dir = test::temp_dir();
-    test::expect_error_message([&] { split_transforms(dir / "missing.json", 8); }, {"missing.json", "cannot read"});
+    test::expect_error_message([&] { split_transforms(dir / "missing.json", 8); },
+                               {"missing.json", "cannot read"});
     test::write_file(dir / "bad.json", "{\"frames\": ");
-    test::expect_error_message([&] { split_transforms(dir / "bad.json", 8); }, {"bad.json", "not valid JSON"});
+    test::expect_error_message([&] { split_transforms(dir / "bad.json", 8); },
+                               {"bad.json", "not valid JSON"});
     test::write_file(dir / "noframes.json", "{}");
-    test::expect_error_message([&] { split_transforms(dir / "noframes.json", 8); }, {"noframes.json", "'frames'"});
+    test::expect_error_message([&] { split_transforms(dir / "noframes.json", 8); },
+                               {"noframes.json", "'frames'"});
     test::write_file(dir / "one.json", frames_json(1).dump());
     test::expect_error_message([&] { split_transforms(dir / "one.json", 8); }, {"one.json", "at least 2"});
     test::write_file(dir / "t.json", frames_json(5).dump());
