@@ -29,16 +29,16 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
             GTEST_SKIP() << tool << " is not installed (scripts/install_deps.sh)";
     if (!fs::exists(cli_binary())) GTEST_SKIP() << "the nerfpt binary is not built";
     const fs::path dir = temp_dir();
-    TurntableSettings st;  // 96 frames of 320x240 over three rising turns
+    TurntableSettings st;  // 144 frames of 320x240 over three rising turns
     render_turntable_video(st, dir / "render", dir / "turntable.mp4");
     write_true_transforms(st, dir / "truth.json");
 
-    // 48 kept frames: 16 per turn, 22.5 degrees apart. Training and the renders after it only need to run
+    // 72 kept frames: 24 per turn, 15 degrees apart. Training and the renders after it only need to run
     // (aabb_scale 4: fewer occupancy cascades to fill); their quality is measured on real data in
     // docs/benchmarks.md.
     const fs::path work = dir / "capture";
     const int rc =
-        run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames", "48",
+        run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames", "72",
                  "--aabb-scale", "4", "--train-steps", "20", "--downscale", "4", "--turntable-frames", "4"},
                 dir / "capture.log");
     ASSERT_EQ(rc, 0) << read_text(dir / "capture.log");
@@ -47,7 +47,8 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     const nlohmann::json& stages = record.at("stages");
     for (const char* stage : {"curate", "poses", "split", "train", "eval", "turntable"})
         EXPECT_TRUE(stages.contains(stage)) << "capture.json has no '" << stage << "' stage";
-    EXPECT_EQ(stages["curate"]["kept"], 48);
+    const int kept = stages["curate"]["kept"].get<int>();  // a window whose best frame is blurry keeps none
+    EXPECT_GE(kept, 70);
     EXPECT_TRUE(std::isfinite(stages["eval"]["psnr"].get<double>()));
     EXPECT_GT(fs::file_size(work / "turntable.mp4"), 0u);
     EXPECT_NO_THROW(nerf::load_model(work / "model.npt"));
@@ -56,7 +57,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     // The same command again finds every stage done and changes nothing.
     const auto model_time = fs::last_write_time(work / "model.npt");
     const int rerun =
-        run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames", "48",
+        run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames", "72",
                  "--aabb-scale", "4", "--train-steps", "20", "--downscale", "4", "--turntable-frames", "4"},
                 dir / "rerun.log");
     ASSERT_EQ(rerun, 0) << read_text(dir / "rerun.log");
@@ -70,7 +71,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     const auto truth = capture::read_transforms_poses(dir / "truth.json");
     const capture::MatchedPoses matched = capture::match_by_name(estimate, truth);
     // COLMAP registers every frame of a textured, sharp, slowly turning scene.
-    ASSERT_GE(matched.estimate.size(), 46u) << "registered frames";
+    ASSERT_GE(int(matched.estimate.size()), kept - 1) << "registered frames";
     const capture::PoseComparison cmp = capture::compare_poses(matched.estimate, matched.reference);
     const double rel_median = cmp.centre.median / cmp.trajectory_scale,
                  rel_max = cmp.centre.max / cmp.trajectory_scale;
@@ -78,14 +79,14 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
         "poses of %zu frames: rotation error median %.3f max %.3f deg; centre error median %.4f max %.4f "
         "of the trajectory scale\n",
         cmp.count, cmp.rotation_deg.median, cmp.rotation_deg.max, rel_median, rel_max);
-    // Thresholds: SIFT at 320x240 and bundle adjustment deliver 0.2 deg and 0.3% median, 0.4 deg and 0.7%
-    // max here (measured, docs/benchmarks.md); the limits leave 2.5-5x room for other COLMAP builds and
-    // encoders. A wrong axis convention gives ~180 degrees, a pose paired with its neighbour's ~20 (both
-    // checked below), so these cannot pass by luck.
-    EXPECT_LT(cmp.rotation_deg.median, 0.5);
-    EXPECT_LT(cmp.rotation_deg.max, 2.0);
-    EXPECT_LT(rel_median, 0.01);
-    EXPECT_LT(rel_max, 0.03);
+    // Thresholds: SIFT at 320x240 and bundle adjustment deliver 0.35 deg and 0.4% median, 0.7 deg and 1.7%
+    // max here (measured, docs/benchmarks.md); the limits leave 2-3x room for other COLMAP builds and
+    // encoders. A wrong axis convention gives ~180 degrees, a pose paired with its neighbour's 15 degrees and
+    // 25% (both checked below), so these cannot pass by luck.
+    EXPECT_LT(cmp.rotation_deg.median, 1.0);
+    EXPECT_LT(cmp.rotation_deg.max, 3.0);
+    EXPECT_LT(rel_median, 0.015);
+    EXPECT_LT(rel_max, 0.05);
 
     // Negative controls, so that the limits are known to catch a broken stage: cameras left in COLMAP's
     // OpenCV axes (y and z flipped), and neighbouring frames' poses swapped (a pairing off by one frame in
