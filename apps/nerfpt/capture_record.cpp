@@ -2,9 +2,9 @@
 
 #include <fmt/format.h>
 
-#include <fstream>
 
 #include "core/error.h"
+#include "core/json_file.h"
 #include "core/temp_file.h"
 
 namespace npt::cli {
@@ -27,11 +27,10 @@ CaptureRecord::CaptureRecord(const fs::path& workdir, const fs::path& video)
     const std::string video_abs = fs::absolute(video).lexically_normal().string();
     std::error_code ec;
     if (fs::exists(m_path, ec)) {
-        std::ifstream in(m_path);
         try {
-            m_json = nlohmann::json::parse(in);
-        } catch (const nlohmann::json::exception& e) {
-            throw Error(m_path.string() + ": not valid JSON (" + e.what() + "); pass --force to start over");
+            m_json = read_json_file(m_path);
+        } catch (const Error& e) {
+            throw Error(std::string(e.what()) + "; pass --force to start over");
         }
         if (!m_json.is_object() || !m_json.contains("stages") || !m_json["stages"].is_object())
             throw Error(m_path.string() + ": 'stages': expected an object; pass --force to start over");

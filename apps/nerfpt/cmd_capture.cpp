@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -23,6 +22,7 @@
 #include "cmd_view.h"
 #include "core/error.h"
 #include "core/executable.h"
+#include "core/json_file.h"
 #include "input_checks.h"
 #include "interrupt.h"
 #include "nerf/model_file.h"
@@ -83,16 +83,6 @@ void discard_trained(const fs::path& work, CaptureRecord& record) {
         if (ec) throw Error((work / name).string() + ": cannot remove (" + ec.message() + ")");
     }
     record.forget_from("train");
-}
-
-nlohmann::json read_json_file(const fs::path& path) {
-    std::ifstream in(path);
-    if (!in) throw Error(path.string() + ": cannot read");
-    try {
-        return nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-        throw Error(path.string() + ": not valid JSON (" + e.what() + ")");
-    }
 }
 
 }  // namespace

@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
 #include <vector>
 
 #include "core/error.h"
+#include "core/json_file.h"
 
 namespace npt::capture {
 namespace fs = std::filesystem;
@@ -38,14 +38,7 @@ double number_field(const nlohmann::json& frame, const nlohmann::json& root, con
 
 RigSummary summarize_rig(const fs::path& json) {
     const std::string file = json.string();
-    std::ifstream in(json);
-    if (!in) throw Error(file + ": cannot read");
-    nlohmann::json root;
-    try {
-        root = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-        throw Error(file + ": not valid JSON (" + e.what() + ")");
-    }
+    const nlohmann::json root = read_json_file(json);
     if (!root.is_object() || !root.contains("frames") || !root["frames"].is_array() || root["frames"].empty())
         throw Error(file + ": 'frames': expected a non-empty array");
     RigSummary rig;

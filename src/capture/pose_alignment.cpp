@@ -13,6 +13,7 @@
 
 #include "capture/pose_alignment_detail.h"
 #include "core/error.h"
+#include "core/json_file.h"
 
 namespace npt::capture {
 namespace {
@@ -132,16 +133,7 @@ double trajectory_scale(const std::vector<Vector3d>& centres) {
 
 std::vector<CameraPose> read_transforms_poses(const fs::path& json) {
     const std::string file = json.string();
-    std::error_code ec;
-    if (!fs::is_regular_file(json, ec)) throw Error(file + ": no such file");
-    std::ifstream in(json);
-    if (!in) throw Error(file + ": cannot open for reading");
-    nlohmann::json j;
-    try {
-        in >> j;
-    } catch (const nlohmann::json::exception& e) {
-        throw Error(file + ": not valid JSON (" + std::string(e.what()) + ")");
-    }
+    const nlohmann::json j = read_json_file(json);
     if (!j.is_object()) throw Error(file + ": must hold a JSON object with 'frames'");
     auto frames = j.find("frames");
     if (frames == j.end() || !frames->is_array()) throw Error(file + ": 'frames' missing or not an array");

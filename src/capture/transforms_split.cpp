@@ -1,11 +1,11 @@
 #include "capture/transforms_split.h"
 
 #include <algorithm>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/error.h"
+#include "core/json_file.h"
 #include "core/temp_file.h"
 
 namespace npt::capture {
@@ -24,14 +24,7 @@ SplitCounts split_transforms(const fs::path& json, int every) {
     const std::string where = json.string();
     if (every < 2)
         throw Error(where + ": a held-out split needs every >= 2 (got " + std::to_string(every) + ")");
-    std::ifstream in(json);
-    if (!in) throw Error(where + ": cannot read");
-    nlohmann::json root;
-    try {
-        root = nlohmann::json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-        throw Error(where + ": not valid JSON (" + e.what() + ")");
-    }
+    const nlohmann::json root = read_json_file(json);
     if (!root.is_object() || !root.contains("frames") || !root["frames"].is_array())
         throw Error(where + ": 'frames': expected an array");
     nlohmann::json frames = root["frames"];

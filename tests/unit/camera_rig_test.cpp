@@ -41,7 +41,7 @@ TEST(CameraRig, MediansOfDistanceAndElevationAndTheFieldOfView) {
 
 TEST(CameraRig, BadInputNamesTheFileAndField) {
     const fs::path dir = test::temp_dir();
-    test::expect_error_message([&] { summarize_rig(dir / "none.json"); }, {"none.json", "cannot read"});
+    test::expect_error_message([&] { summarize_rig(dir / "none.json"); }, {"none.json", "no such file"});
     test::write_file(dir / "e.json", R"({"frames": []})");
     test::expect_error_message([&] { summarize_rig(dir / "e.json"); }, {"e.json", "'frames'"});
     test::write_file(dir / "m.json",

@@ -60,7 +60,7 @@ TEST(TransformsSplit, FewFramesStillHoldOneOut) {
 TEST(TransformsSplit, BadInputIsAOneLineErrorNamingTheFile) {
     const fs::path dir = test::temp_dir();
     test::expect_error_message([&] { split_transforms(dir / "missing.json", 8); },
-                               {"missing.json", "cannot read"});
+                               {"missing.json", "no such file"});
     test::write_file(dir / "bad.json", "{\"frames\": ");
     test::expect_error_message([&] { split_transforms(dir / "bad.json", 8); },
                                {"bad.json", "not valid JSON"});
