@@ -123,4 +123,16 @@ void write_dataset(const nerf::Dataset& ds, const std::filesystem::path& folder,
     std::ofstream(folder / "transforms.json") << j.dump(2);
 }
 
+nerf::NerfConfig small_sphere_config() {
+    nerf::NerfConfig c;
+    c.encoding.grid.levels = 8;
+    c.encoding.grid.log2_table_size = 15;
+    c.encoding.finest_resolution = 128.0f;
+    c.occupancy.resolution = 32;
+    c.occupancy.update_interval = 1;
+    c.occupancy.warmup_steps = 8;
+    c.training.batch_samples = 1 << 13;
+    return c;
+}
+
 }  // namespace npt::test

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "nerf/dataset.h"
+#include "nerf/nerf_config.h"
 
 namespace npt::test {
 
@@ -17,6 +18,11 @@ struct SphereSceneOptions {
 };
 
 nerf::Dataset make_sphere_scene(const SphereSceneOptions& options);
+
+// instant-ngp's config scaled down for the sphere scene's 32 px images: 8 levels up to 128 cells, 2^15 entries,
+// a 32^3 occupancy grid, 2^13-sample steps; the grid schedule counts instant-ngp steps of 2^18 samples, i.e.
+// an update every 32 of these steps, the first 8 over every cell.
+nerf::NerfConfig small_sphere_config();
 
 // Writes the data set as PNG frames plus transforms.json (camera_angle_x, NeRF-synthetic style) into folder.
 void write_dataset(const nerf::Dataset& ds, const std::filesystem::path& folder, float fov_degrees);

@@ -62,6 +62,7 @@ void CaptureRecord::forget_from(const std::string& stage) {
         later = later || stage == name;
         if (later) m_json["stages"].erase(name);
     }
+    save();  // at once: the caller is about to remove or replace those stages' files
 }
 
 std::string CaptureRecord::markdown() const { return capture_report_markdown(m_json); }
@@ -110,8 +111,8 @@ std::string capture_report_markdown(const nlohmann::json& record) {
         total += num(e, "seconds");
     }
     if (const auto v = get("turntable"); !v.empty()) {
-        md += fmt::format("| turntable | {}, {} frames of {}x{} | {:.1f} s |\n", v.value("file", ""),
-                          v.value("frames", 0), v.value("width", 0), v.value("height", 0), num(v, "seconds"));
+        md += fmt::format("| turntable | {}, {} frames of {} | {:.1f} s |\n", v.value("file", ""),
+                          v.value("frames", 0), v.value("res", ""), num(v, "seconds"));
         total += num(v, "seconds");
     }
     md += fmt::format(

@@ -247,7 +247,11 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         record.finish("split", {{"every", args.holdout_every}, {"train", n.train}, {"test", n.test}});
     } else {
         banner(global, 3, "split: none (--holdout-every 0), training on every frame");
-        for (const char* name : {"transforms_train.json", "transforms_test.json"}) fs::remove(work / name);
+        for (const char* name : {"transforms_train.json", "transforms_test.json"}) {
+            std::error_code ec;
+            fs::remove(work / name, ec);
+            if (ec) throw Error((work / name).string() + ": cannot remove (" + ec.message() + ")");
+        }
         discard_trained(work, record);
         record.finish("split",
                       {{"every", 0}, {"train", record.stage("poses").value("registered", 0)}, {"test", 0}});
@@ -319,10 +323,15 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                {"seconds", clock.seconds()}});
     }
 
-    // 6 turntable
+    // 6 turntable, at the training size by default (even: the video is yuv420p)
+    const std::string res = args.turntable_res.empty() ? fmt::format("{}x{}", (rig.width / downscale) & ~1,
+                                                                     (rig.height / downscale) & ~1)
+                                                       : args.turntable_res;
+    const nlohmann::json& done_turntable = record.stage("turntable");
     if (args.turntable_frames == 0) {
         banner(global, 6, "turntable: skipped (--turntable-frames 0)");
-    } else if (record.done("turntable")) {
+    } else if (record.done("turntable") && done_turntable.value("frames", 0) == args.turntable_frames &&
+               done_turntable.value("res", "") == res) {
         banner(global, 6, "turntable: done in an earlier run (turntable.mp4)");
     } else {
         banner(global, 6, "turntable: rendering turntable.mp4");
@@ -330,9 +339,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         v.model = model.string();
         v.output = (work / "turntable.mp4").string();
         v.orbit = args.turntable_frames;
-        // Even sizes: the video is yuv420p.
-        const int tw = (rig.width / downscale) & ~1, th = (rig.height / downscale) & ~1;
-        v.res = args.turntable_res.empty() ? fmt::format("{}x{}", tw, th) : args.turntable_res;
+        v.res = res;
         v.fov = float(rig.fov_x_deg);
         v.elevation = float(std::clamp(rig.median_elevation_deg, -80.0, 80.0));
         v.distance = float(rig.median_distance);
@@ -340,12 +347,9 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         const Clock clock;
         const int rc = run_view(v, global, interrupts);
         if (rc != 0) return rc;
-        int w = tw, h = th;
-        std::sscanf(v.res.c_str(), "%dx%d", &w, &h);
         record.finish("turntable", {{"file", "turntable.mp4"},
                                     {"frames", args.turntable_frames},
-                                    {"width", w},
-                                    {"height", h},
+                                    {"res", res},
                                     {"elevation_deg", v.elevation},
                                     {"distance", v.distance},
                                     {"seconds", clock.seconds()}});

@@ -14,10 +14,10 @@
 #include <vector>
 
 #include "core/error.h"
-#include "core/temp_file.h"
 #include "core/image_io.h"
 #include "core/image_metrics.h"
 #include "core/progress.h"
+#include "core/temp_file.h"
 #include "input_checks.h"
 #include "dataset_loading.h"
 #include "interrupt.h"

@@ -1,11 +1,8 @@
 #include "cmd_view.h"
 
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <spawn.h>
 #include <spdlog/spdlog.h>
 #include <stdlib.h>
-#include <sys/wait.h>
 #include <tbb/global_control.h>
 #include <unistd.h>
 
@@ -33,8 +30,6 @@
 #include "nerf/model_file.h"
 #include "nerf/orbit_camera.h"
 #include "nerf/render_view.h"
-
-extern char** environ;
 
 namespace npt::cli {
 namespace fs = std::filesystem;
@@ -147,37 +142,15 @@ void run_ffmpeg(const fs::path& ffmpeg, const fs::path& frames, float fps, const
     std::vector<std::string> argv_s = {ffmpeg.string(), "-nostdin", "-loglevel", "error",     "-y",
                                        "-framerate",    rate,       "-i",        input,       "-pix_fmt",
                                        "yuv420p",       "-c:v",     "libx264",   out.string()};
-    std::vector<char*> argv;
-    for (std::string& s : argv_s) argv.push_back(s.data());
-    argv.push_back(nullptr);
-
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
-    posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-    posix_spawnattr_t attr;
-    posix_spawnattr_init(&attr);
-    sigset_t none;
-    sigemptyset(&none);
-    posix_spawnattr_setsigmask(&attr, &none);
-    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
-    pid_t pid = 0;
-    const int err = posix_spawn(&pid, ffmpeg.c_str(), &actions, &attr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    posix_spawnattr_destroy(&attr);
-    if (err != 0) throw Error("cannot run " + ffmpeg.string() + ": " + std::strerror(err));
-    int status = 0;
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
-    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
+    const int status = run_logged(argv_s, log);
+    if (status == 0) return;
     // ffmpeg's last line says what went wrong (an unknown encoder, an odd size, a full disk).
     std::ifstream f(log);
     std::string line, last;
     while (std::getline(f, line))
         if (!line.empty()) last = line;
-    const std::string how = WIFEXITED(status) ? "exit code " + std::to_string(WEXITSTATUS(status))
-                                              : "signal " + std::to_string(WTERMSIG(status));
+    const std::string how = status < 128 ? "exit code " + std::to_string(status)
+                                          : "signal " + std::to_string(status - 128);
     throw Error("ffmpeg failed writing '" + out.string() + "' (" + how + ")" +
                 (last.empty() ? "" : ": " + last));
 }

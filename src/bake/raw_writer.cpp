@@ -4,8 +4,8 @@
 #include <vector>
 
 #include "bake/grid_writers.h"
-#include "core/temp_file.h"
 #include "core/error.h"
+#include "core/temp_file.h"
 
 namespace npt::bake {
 

@@ -8,20 +8,13 @@
 #include <vector>
 
 #include "bake/grid_writers.h"
-#include "core/temp_file.h"
 #include "core/error.h"
-#include "core/image_io.h"
+#include "core/srgb.h"
+#include "core/temp_file.h"
+#include "media/openvdb_reader.h"
 
 namespace npt::bake {
 namespace {
-
-void init_openvdb_once() {
-    static const bool initialised = [] {
-        openvdb::initialize();
-        return true;
-    }();
-    (void)initialised;
-}
 
 struct VdbGrids {
     openvdb::FloatGrid::Ptr density;
@@ -29,7 +22,7 @@ struct VdbGrids {
 };
 
 VdbGrids make_grids(const BakedGrid& grid) {
-    init_openvdb_once();
+    media::ensure_openvdb_initialized();
     const BakeLayout& L = grid.layout;
     // index -> local: local = -1 + (index + 0.5) * 2 / dims, per axis (the crop fills the cube, as placed).
     auto xf = openvdb::math::Transform::createLinearTransform(1.0);

@@ -1,8 +1,5 @@
 #include "capture/colmap_runner.h"
 
-#include <fcntl.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -24,28 +21,6 @@ std::string last_line_of(const fs::path& file) {
     while (std::getline(in, line))
         if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
     return last.empty() ? "no output" : last;
-}
-
-// Runs argv with stdout and stderr into `log`; returns the exit status (128 + signal when killed).
-int run_logged(const std::vector<std::string>& argv, const fs::path& log) {
-    const pid_t pid = ::fork();
-    if (pid < 0) throw Error("could not start " + argv[0]);
-    if (pid == 0) {
-        const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        if (fd >= 0) {
-            ::dup2(fd, 1);
-            ::dup2(fd, 2);
-        }
-        std::vector<char*> args;
-        for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-        args.push_back(nullptr);
-        ::execvp(args[0], args.data());
-        ::_exit(127);
-    }
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0) {
-    }
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 // Frames are the folder's images, except the contact sheet `nerfpt curate` writes beside them.

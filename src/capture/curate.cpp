@@ -6,11 +6,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
 
 #include "core/error.h"
+#include "core/temp_file.h"
 
 namespace npt::capture {
 
@@ -154,9 +154,7 @@ void write_curate_json(const std::filesystem::path& path, const std::filesystem:
                   {"dropped_sharpness", dropped_sharpness}}},
                 {"seconds", r.seconds},
                 {"frames", frames}};
-    std::ofstream out(path);
-    out << doc.dump(2) << "\n";
-    if (!out) throw Error(fmt::format("{}: could not write", path.string()));
+    write_text_atomic(path, doc.dump(2) + "\n");
 }
 
 CurateReport curate_video(const std::filesystem::path& video, const std::filesystem::path& out_dir,
@@ -219,6 +217,12 @@ CurateReport curate_video(const std::filesystem::path& video, const std::filesys
             }
             ++i;
         }
+        // The second decode must give the frames the first one scored; a short one would leave curate.json
+        // naming files that were never written.
+        if (written != report.kept)
+            throw Error(fmt::format("{}: ffmpeg returned fewer frames the second time ({} of {} kept frames "
+                                    "written); the file may be damaged",
+                                    video.string(), written, report.kept));
     }
     std::vector<bool> kept;
     for (const FrameRecord& f : report.frames) kept.push_back(f.kept);

@@ -4,10 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "core/temp_file.h"
 
 namespace npt::capture {
 namespace {
@@ -212,10 +212,7 @@ void write_transforms(const ColmapModel& model, const fs::path& json_path,
         j["frames"].push_back(fr);
     }
 
-    std::ofstream out(json_path);
-    if (!out) throw Error(json_path.string() + ": cannot write (check the folder exists and is writable)");
-    out << j.dump(2) << "\n";
-    if (!out) throw Error(json_path.string() + ": write failed (disk full?)");
+    write_text_atomic(json_path, j.dump(2) + "\n");
 }
 
 }  // namespace npt::capture

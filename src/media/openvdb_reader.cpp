@@ -13,15 +13,6 @@
 namespace npt::media {
 namespace {
 
-void init_openvdb_once() {
-    // A function-local static is initialised exactly once even when loaders run on several threads.
-    static const bool initialised = [] {
-        openvdb::initialize();
-        return true;
-    }();
-    (void)initialised;
-}
-
 // local -> index of the dense array: OpenVDB's own world->index map (its "world" is the cube's local space),
 // shifted so that the bbox's min voxel is index 0. Built from the map's images of the origin and the unit
 // vectors, so that we never depend on OpenVDB's row-vector matrix layout.
@@ -84,7 +75,7 @@ Vec3 to_vec3(const openvdb::Vec3s& v) { return Vec3(v[0], v[1], v[2]); }
 }  // namespace
 
 VolumeGrid read_openvdb_grid(const std::filesystem::path& path) {
-    init_openvdb_once();
+    ensure_openvdb_initialized();
     const std::string where = path.string();
     try {
         openvdb::io::File file(where);
@@ -149,6 +140,15 @@ VolumeGrid read_openvdb_grid(const std::filesystem::path& path) {
             if (c == '\n') c = ' ';
         throw Error(where + ": cannot read OpenVDB file: " + msg);
     }
+}
+
+void ensure_openvdb_initialized() {
+    // A function-local static is initialised exactly once even when loaders run on several threads.
+    static const bool initialised = [] {
+        openvdb::initialize();
+        return true;
+    }();
+    (void)initialised;
 }
 
 }  // namespace npt::media

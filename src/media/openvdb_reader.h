@@ -12,4 +12,8 @@ namespace npt::media {
 // Throws npt::Error naming the file and the grid.
 VolumeGrid read_openvdb_grid(const std::filesystem::path& path);
 
+// openvdb::initialize(), once per process, safe from several threads: every use of OpenVDB (this reader,
+// the bake writer) calls it first.
+void ensure_openvdb_initialized();
+
 }  // namespace npt::media

@@ -96,20 +96,17 @@ VolumeSet::VolumeSet(const scene::Scene& scene) {
             const nerf::NerfModel& m = *owned.model;
             owned.model->training.reset();  // rendering needs the averaged parameters only
             v.kind = VolumeKind::Nerf;
-            nerf::CropBox box;
-            const float half = 0.5f * m.aabb_scale;
-            box.min = Vec3(0.5f - half);
-            box.max = Vec3(0.5f + half);
+            v.nerf.march = m.march_params();
+            nerf::CropBox box{v.nerf.march.aabb_min, v.nerf.march.aabb_max};  // the model's box
             if (desc.has_crop) {
                 box.min = vmax(box.min, desc.crop.min);
                 box.max = vmin(box.max, desc.crop.max);
                 if (!(box.max.x > box.min.x && box.max.y > box.min.y && box.max.z > box.min.z))
                     throw Error(where + ": extras.volume.crop does not overlap the model's box (0.5 +- " +
-                                std::to_string(half) + " in model space)");
+                                std::to_string(0.5f * m.aabb_scale) + " in model space)");
             }
             v.nerf.field = m.field();
             v.nerf.occupancy = m.occupancy.view();
-            v.nerf.march = m.march_params();
             v.nerf.march.aabb_min = box.min;
             v.nerf.march.aabb_max = box.max;
             v.nerf.local_to_model = nerf::local_to_model(inst.local_min, inst.local_max, box);

@@ -5,11 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "capture/pose_alignment.h"
 #include "core/executable.h"
+#include "core/json_file.h"
 #include "nerf/model_file.h"
 #include "test_support.h"
 #include "turntable_scene.h"
@@ -17,11 +17,6 @@
 namespace npt::test {
 namespace {
 namespace fs = std::filesystem;
-
-nlohmann::json read_json(const fs::path& p) {
-    std::ifstream in(p);
-    return nlohmann::json::parse(in);
-}
 
 TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     for (const char* tool : {"ffmpeg", "colmap"})
@@ -37,13 +32,24 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     // (aabb_scale 4: fewer occupancy cascades to fill); their quality is measured on real data in
     // docs/benchmarks.md.
     const fs::path work = dir / "capture";
-    const int rc =
-        run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames", "72",
-                 "--aabb-scale", "4", "--train-steps", "20", "--downscale", "4", "--turntable-frames", "4"},
-                dir / "capture.log");
+    const std::vector<std::string> capture = {"capture",
+                                              (dir / "turntable.mp4").string(),
+                                              "-o",
+                                              work.string(),
+                                              "--target-frames",
+                                              "72",
+                                              "--aabb-scale",
+                                              "4",
+                                              "--train-steps",
+                                              "20",
+                                              "--downscale",
+                                              "4",
+                                              "--turntable-frames",
+                                              "4"};
+    const int rc = run_cli(capture, dir / "capture.log");
     ASSERT_EQ(rc, 0) << read_text(dir / "capture.log");
 
-    const nlohmann::json record = read_json(work / "capture.json");
+    const nlohmann::json record = read_json_file(work / "capture.json");
     const nlohmann::json& stages = record.at("stages");
     for (const char* stage : {"curate", "poses", "split", "train", "eval", "turntable"})
         EXPECT_TRUE(stages.contains(stage)) << "capture.json has no '" << stage << "' stage";
@@ -56,10 +62,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
 
     // The same command again finds every stage done and changes nothing.
     const auto model_time = fs::last_write_time(work / "model.npt");
-    const int rerun =
-        run_cli({"capture", (dir / "turntable.mp4").string(), "-o", work.string(), "--target-frames", "72",
-                 "--aabb-scale", "4", "--train-steps", "20", "--downscale", "4", "--turntable-frames", "4"},
-                dir / "rerun.log");
+    const int rerun = run_cli(capture, dir / "rerun.log");
     ASSERT_EQ(rerun, 0) << read_text(dir / "rerun.log");
     const std::string rerun_log = read_text(dir / "rerun.log");
     for (const char* stage : {"curate", "poses", "split", "train", "eval", "turntable"})
@@ -104,7 +107,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
                 wrong.centre.median / wrong.trajectory_scale);
 
     // Intrinsics: COLMAP refines the focal length from its 1.2 x width guess to the true one.
-    const nlohmann::json tj = read_json(work / "transforms.json");
+    const nlohmann::json tj = read_json_file(work / "transforms.json");
     const double fl_true = 0.5 * st.height / std::tan(0.5 * st.fov_y_deg * 3.14159265358979 / 180.0);
     EXPECT_NEAR(tj.at("fl_x").get<double>(), fl_true, 0.02 * fl_true);
 }

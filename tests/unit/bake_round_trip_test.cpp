@@ -23,15 +23,7 @@ namespace {
 
 nerf::NerfModel trained_spheres() {
     const nerf::Dataset train = test::make_sphere_scene({.views = 20, .size = 32, .view_seed = 1});
-    nerf::NerfConfig c;
-    c.encoding.grid.levels = 8;
-    c.encoding.grid.log2_table_size = 15;
-    c.encoding.finest_resolution = 128.0f;
-    c.occupancy.resolution = 32;
-    c.occupancy.update_interval = 1;
-    c.occupancy.warmup_steps = 8;
-    c.training.batch_samples = 1 << 13;
-    nerf::NerfModel m = nerf::create_model(c, 1.0f, nerf::ngp_world_to_model(train.scale, train.offset));
+    nerf::NerfModel m = nerf::create_model(test::small_sphere_config(), 1.0f, nerf::ngp_world_to_model(train.scale, train.offset));
     nerf::Trainer t(m, train);
     for (int i = 0; i < 300; ++i) t.step();
     t.sync_model();

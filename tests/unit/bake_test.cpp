@@ -72,9 +72,9 @@ Rgb to_linear(Rgb c) { return Rgb(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb
 
 // Tolerances. The bake evaluates the field batched (matrix products, hash encoding in another order) and the
 // reference is the per-sample NPT_HD query: they differ by float rounding, ~1e-6 relative on the MLP outputs,
-// so σ = exp(raw) agrees to ~1e-6 relative and the sigmoid colours to ~1e-7; srgb_to_linear has slope <= 1 on
-// [0, 1] in linear terms of the encoded value's error. 1e-4 leaves margin, while a wrong voxel, axis or unit
-// is off by O(1).
+// so σ = exp(raw) agrees to ~1e-6 relative and the sigmoid colours to ~1e-7; srgb_to_linear's slope is at
+// most 2.4 / 1.055 ≈ 2.3 on [0, 1], so the linear colours agree to ~3e-7. 1e-4 leaves margin, while a wrong
+// voxel, axis or unit is off by O(1).
 constexpr float k_sigma_rel = 1e-4f, k_color_abs = 1e-4f;
 
 void write(GridFormat f, const fs::path& path, const BakedGrid& g) {

@@ -16,20 +16,7 @@
 namespace npt::nerf {
 namespace {
 
-// A scaled-down instant-ngp config: the scene has 32 px images, so 8 levels up to 128 cells suffice.
-NerfConfig small_config() {
-    NerfConfig c;
-    c.encoding.grid.levels = 8;
-    c.encoding.grid.log2_table_size = 15;
-    c.encoding.finest_resolution = 128.0f;
-    c.occupancy.resolution = 32;
-    // Counted in instant-ngp steps of 2^18 samples, i.e. 32 of these 2^13-sample steps: an update every 32
-    // steps, the first 8 of them over every cell.
-    c.occupancy.update_interval = 1;
-    c.occupancy.warmup_steps = 8;
-    c.training.batch_samples = 1 << 13;
-    return c;
-}
+NerfConfig small_config() { return test::small_sphere_config(); }
 
 // Mean PSNR over the views of `test`, composited on white as the evaluation convention says.
 double held_out_psnr(const NerfModel& model, const Dataset& test) {

@@ -9,11 +9,9 @@
 #include <cmath>
 
 #include "core/image_io.h"
-#include "core/rng.h"
 #include "nerf/model_file.h"
-#include "render/cpu/embree_scene.h"
-#include "render/path_integrator.h"
 #include "render/scene_data.h"
+#include "scene_builders.h"
 #include "test_support.h"
 
 namespace npt::render {
@@ -78,15 +76,7 @@ struct Fixture {
     }
 };
 
-Rgb trace(const scene::Scene& s, Ray ray) {
-    SceneData data(s, 8, 8);
-    cpu::EmbreeScene embree(s);
-    cpu::EmbreeTracer tracer(embree);
-    PathSettings ps;
-    ps.max_depth = 4;
-    Pcg32 rng(1, 2);
-    return trace_path(data.view(), tracer, ray, rng, ps);
-}
+Rgb trace(const scene::Scene& s, Ray ray) { return test::trace_one_path(s, ray); }
 
 void expect_rgb(Rgb got, Vec3 expected, const char* what) {
     for (int k = 0; k < 3; ++k)

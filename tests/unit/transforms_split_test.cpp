@@ -2,10 +2,10 @@
 
 #include <gtest/gtest.h>
 
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "core/json_file.h"
 #include "test_support.h"
 
 namespace npt::capture {
@@ -23,17 +23,12 @@ nlohmann::json frames_json(int n) {
     return root;
 }
 
-nlohmann::json read(const fs::path& p) {
-    std::ifstream in(p);
-    return nlohmann::json::parse(in);
-}
-
 TEST(TransformsSplit, HoldsOutEveryNthFrameInNameOrderAndKeepsTheRest) {
     const fs::path dir = test::temp_dir();
     test::write_file(dir / "transforms.json", frames_json(20).dump());
     const SplitCounts n = split_transforms(dir / "transforms.json", 8);
-    const nlohmann::json train = read(dir / "transforms_train.json"),
-                         test_split = read(dir / "transforms_test.json");
+    const nlohmann::json train = read_json_file(dir / "transforms_train.json"),
+                         test_split = read_json_file(dir / "transforms_test.json");
     // Frames 4 and 12 (every 8th from 8/2 = 4) are held out.
     EXPECT_EQ(n.test, 2u);
     EXPECT_EQ(n.train, 18u);
