@@ -237,6 +237,7 @@ NerfConfig config_from_json(const json& j, const std::string& source) {
         TrainingConfig& t = c.training;
         r.read_int("batch_samples", t.batch_samples, 256, 1 << 24);
         r.read_int("max_rays_per_batch", t.max_rays_per_batch, 1, 1 << 24);
+        r.read_int("cuda_batch_samples", t.cuda_batch_samples, 1 << 12, 1 << 24);
         r.read_u64("seed", t.seed);
         r.read_int("checkpoint_interval", t.checkpoint_interval, 1, k_int_max);
         r.read_bool("random_background", t.random_background);
@@ -284,6 +285,7 @@ json config_to_json(const NerfConfig& c) {
     const TrainingConfig& t = c.training;
     j["training"] = {{"batch_samples", t.batch_samples},
                      {"max_rays_per_batch", t.max_rays_per_batch},
+                     {"cuda_batch_samples", t.cuda_batch_samples},
                      {"seed", t.seed},
                      {"checkpoint_interval", t.checkpoint_interval},
                      {"random_background", t.random_background}};

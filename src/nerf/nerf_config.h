@@ -69,6 +69,9 @@ struct TrainingConfig {
     // GPU; 2^16 keeps a CPU step under a second so progress and checkpoints stay responsive.
     int batch_samples = 1 << 16;
     int max_rays_per_batch = 1 << 14;
+    // The CUDA trainer's batch: samples per step that contribute to the loss (after each ray's early stop:
+    // instant-ngp's compacted batch). Rays per step adapt to reach it, up to cuda_batch_samples rays.
+    int cuda_batch_samples = 1 << 18;
     uint64_t seed = 1337;
     int checkpoint_interval = 500;  // steps between checkpoints (also on Ctrl-C and at the end)
     bool random_background = true;  // train against a random colour per ray, so alpha is learned

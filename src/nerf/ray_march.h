@@ -104,52 +104,93 @@ NPT_HD NPT_INLINE float march_advance(const MarchParams& mp, float t, float t_ta
     return fmaxf(t, t_target);
 }
 
-// Calls visit(MarchSample) for each sample of `ray` (unit direction, model space) in order, at most
-// mp.max_samples of them, until visit returns false; returns how many were visited. jitter in [0,1) offsets the
-// first sample by jitter * step so that training sees every depth. Samples lie in occupied cells only; their dt
-// is the step taken at them. A view with no occupancy array (occupied == nullptr) counts every cell as
-// occupied. Non-finite input, non-positive steps or a ray that misses give 0.
-template <typename Visit>
-NPT_HD inline int march_ray_visit(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
-                                  float jitter, Visit&& visit) {
-    if (mp.max_samples <= 0 || !isfinite(jitter) || !isfinite(mp.cone_angle)) return 0;
+// Where a march stands: a ray can be marched in pieces (the GPU renderer takes a few samples per ray per round)
+// and gives the same samples as marching it in one go.
+struct MarchCursor {
+    float t = 0, t_far = 0;
+    int count = 0;      // samples emitted so far
+    int skips = 0;      // empty cells skipped so far
+    int max_skips = 0;  // see march_start
+    bool stopped = false;
+    NPT_HD NPT_INLINE bool done(const MarchParams& mp) const {
+        return stopped || !(t < t_far) || count >= mp.max_samples;
+    }
+};
+
+// Sets up the march of `ray` (unit direction, model space); false when there is nothing to march: non-finite
+// input, non-positive steps, or a ray that misses. jitter in [0,1) offsets the first sample by jitter * step
+// so that training sees every depth.
+NPT_HD inline bool march_start(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray, float jitter,
+                               MarchCursor* c) {
+    if (mp.max_samples <= 0 || !isfinite(jitter) || !isfinite(mp.cone_angle)) return false;
     if (!(mp.min_step > 0.0f) || !(mp.max_step > 0.0f) || !isfinite(mp.min_step) || !isfinite(mp.max_step))
-        return 0;
-    if (grid.cascades < 1 || grid.resolution < 1) return 0;
+        return false;
+    if (grid.cascades < 1 || grid.resolution < 1) return false;
     float t_near = 0.0f;
     float t_far = 0.0f;
-    if (!march_bounds(mp, ray, &t_near, &t_far)) return 0;
-    t_far = fminf(t_far, mp.t_max);
-
+    if (!march_bounds(mp, ray, &t_near, &t_far)) return false;
+    c->t_far = fminf(t_far, mp.t_max);
     // Every pass either emits a sample or leaves a cell; a straight line leaves at most 3 (R + 1) cells of
     // each cascade, so this bound is never reached in exact arithmetic: it stops a ray whose t is so large
     // that steps no longer change it.
-    const int max_skips = 3 * (grid.resolution + 2) * grid.cascades + 64;
-    int skips = 0;
-    int count = 0;
-    float t = t_near + jitter * march_step(mp, t_near);
-    while (t < t_far && count < mp.max_samples) {
+    c->max_skips = 3 * (grid.resolution + 2) * grid.cascades + 64;
+    c->skips = 0;
+    c->count = 0;
+    c->stopped = false;
+    c->t = t_near + jitter * march_step(mp, t_near);
+    return true;
+}
+
+// Continues the march: calls visit(MarchSample) for each sample in order until visit returns false (the
+// cursor then stands after that sample) or the march is done. Samples lie in occupied cells only; their dt is
+// the step taken at them. A view with no occupancy array (occupied == nullptr) counts every cell as occupied.
+template <typename Visit>
+NPT_HD inline void march_continue(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
+                                  MarchCursor& c, Visit&& visit) {
+    while (!c.stopped && c.t < c.t_far && c.count < mp.max_samples) {
+        const float t = c.t;
         const Vec3 p = ray.at(t);
         const float dt = march_step(mp, t);
-        const int c = march_cascade(grid, p, dt);
-        if (grid.occupied == nullptr || grid.is_occupied(p, c)) {
-            ++count;
-            if (!visit(MarchSample{p, t, dt})) break;
+        const int cas = march_cascade(grid, p, dt);
+        if (grid.occupied == nullptr || grid.is_occupied(p, cas)) {
+            ++c.count;
+            const bool more = visit(MarchSample{p, t, dt});
             const float next = t + dt;
-            if (!(next > t)) break;
-            t = next;
+            if (!(next > t)) {
+                c.stopped = true;
+                return;
+            }
+            c.t = next;
+            if (!more) return;
         } else {
-            if (++skips > max_skips) break;
+            if (++c.skips > c.max_skips) {
+                c.stopped = true;
+                return;
+            }
             // The epsilon (a millionth of a cell, or of t where t is larger) moves the target off the
             // boundary itself, so that rounding of o + t d cannot leave the next position in this cell.
-            const float cell = grid.cascade_size(c) / float(grid.resolution);
+            const float cell = grid.cascade_size(cas) / float(grid.resolution);
             const float eps = fmaxf(1e-6f * cell, 1e-6f * t);
-            const float next = march_advance(mp, t, t + march_distance_to_cell_exit(grid, p, ray.d, c) + eps);
-            if (!(next > t)) break;
-            t = next;
+            const float next = march_advance(mp, t, t + march_distance_to_cell_exit(grid, p, ray.d, cas) + eps);
+            if (!(next > t)) {
+                c.stopped = true;
+                return;
+            }
+            c.t = next;
         }
     }
-    return count;
+}
+
+// Calls visit(MarchSample) for each sample of `ray` (unit direction, model space) in order, at most
+// mp.max_samples of them, until visit returns false; returns how many were visited (march_start and
+// march_continue in one go). Non-finite input, non-positive steps or a ray that misses give 0.
+template <typename Visit>
+NPT_HD inline int march_ray_visit(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
+                                  float jitter, Visit&& visit) {
+    MarchCursor c;
+    if (!march_start(mp, grid, ray, jitter, &c)) return 0;
+    march_continue(mp, grid, ray, c, visit);
+    return c.count;
 }
 
 // Writes up to mp.max_samples samples of `ray` into out and returns how many (march_ray_visit).

@@ -10,6 +10,7 @@
 #include "core/rng.h"
 #include "nerf/composite.h"
 #include "nerf/field_batch.h"
+#include "nerf/loss.h"
 
 namespace npt::nerf {
 
@@ -24,17 +25,6 @@ struct TrainRay {
     uint32_t first = 0, count = 0;  // samples [first, first + count) of the batch
     Rgb target, background;
 };
-
-// Huber loss per channel (instant-ngp's, alpha = delta) and its derivative w.r.t. the prediction.
-inline float huber(float diff, float delta, float* grad) {
-    const float a = std::fabs(diff);
-    if (a < delta) {
-        *grad = diff / delta;
-        return 0.5f * diff * diff / delta;
-    }
-    *grad = diff > 0 ? 1.0f : -1.0f;
-    return a - 0.5f * delta;
-}
 
 }  // namespace
 
@@ -106,9 +96,14 @@ StepStats Trainer::step() {
             const int ix = std::min(int(px), m_data.width - 1), iy = std::min(int(py), m_data.height - 1);
             const uint8_t* pix = m_data.image(img) + (size_t(iy) * m_data.width + ix) * 4;
             TrainRay& tr = rays[r];
-            tr.background = cfg.training.random_background
-                                ? Rgb(rng.next_float(), rng.next_float(), rng.next_float())
-                                : Rgb(1.0f);
+            tr.background = Rgb(1.0f);
+            if (cfg.training.random_background) {
+                // One draw per statement: the order of a constructor's arguments is unspecified in C++, and
+                // the GPU trainer must draw the same background for the same ray.
+                tr.background.x = rng.next_float();
+                tr.background.y = rng.next_float();
+                tr.background.z = rng.next_float();
+            }
             const float alpha = pix[3] / 255.0f;
             const Rgb rgb(pix[0] / 255.0f, pix[1] / 255.0f, pix[2] / 255.0f);
             tr.target = rgb * alpha + tr.background * (1.0f - alpha);
@@ -180,7 +175,7 @@ StepStats Trainer::step() {
         double loss = 0, se = 0;
         for (int k = 0; k < 3; ++k) {
             const float diff = fwd.color[k] - tr.target[k];
-            loss += huber(diff, delta, &grad[k]);
+            loss += huber_loss(diff, delta, &grad[k]);
             se += double(diff) * diff;
         }
         ray_loss[r] = loss;
@@ -244,6 +239,7 @@ StepStats Trainer::step() {
     stats.mse = n_kept ? se / (3.0 * n_kept) : 0.0;
     stats.rays = uint32_t(n_kept);
     stats.samples = uint32_t(n_samples);
+    stats.marched = uint32_t(n_samples);
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     st.elapsed_seconds += stats.seconds;
     return stats;

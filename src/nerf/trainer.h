@@ -19,7 +19,8 @@ struct StepStats {
     double loss = 0;          // mean Huber loss per ray (summed over channels)
     double mse = 0;           // mean squared error per channel, for a training PSNR
     uint32_t rays = 0;        // rays in the batch
-    uint32_t samples = 0;     // samples evaluated
+    uint32_t samples = 0;     // samples trained on (the CUDA trainer: those before each ray's early stop)
+    uint32_t marched = 0;     // samples marched and evaluated (CPU: the same as samples)
     double seconds = 0;       // wall time of the step
     bool occupancy_updated = false;
     // Where the step's time went, for profiles and benchmarks.

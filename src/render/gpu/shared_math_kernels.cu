@@ -11,7 +11,7 @@
 #include "nerf/ray_march.h"
 #include "nerf/sh_encoding.h"
 #include "render/camera.h"
-#include "render/gpu/device_buffer.h"
+#include "core/cuda/device_buffer.h"
 #include "render/gpu/shared_math_check.h"
 
 namespace npt::gpu {

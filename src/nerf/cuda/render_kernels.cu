@@ -1,0 +1,152 @@
+#include "nerf/cuda/render_kernels.h"
+
+#include "core/cuda/device_buffer.h"
+
+namespace npt::nerf::cuda {
+
+namespace {
+
+constexpr int k_block = 128;
+
+__device__ __forceinline__ void write_pixel(const RenderFrame& f, uint32_t pixel, Rgb color, float tau) {
+    const float t = expf(-tau);
+    const Rgb c = color + f.background * t;
+    f.image[pixel] = make_float4(c.x, c.y, c.z, 1.0f - t);
+}
+
+// Appends `item` to a list with one atomic per warp.
+__device__ __forceinline__ void append(bool take, uint32_t item, uint32_t* list, uint32_t* count) {
+    const unsigned mask = __ballot_sync(0xffffffffu, take);
+    if (mask == 0) return;
+    if (!take) return;  // the shuffle below is among the lanes in mask only
+    const int lane = threadIdx.x & 31;
+    const int leader = __ffs(mask) - 1;
+    uint32_t base = 0;
+    if (lane == leader) base = atomicAdd(count, uint32_t(__popc(mask)));
+    base = __shfl_sync(mask, base, leader);
+    list[base + __popc(mask & ((1u << lane) - 1u))] = item;
+}
+
+__global__ void __launch_bounds__(k_block) init_kernel(RenderFrame f, RayCamera cam, uint32_t* alive,
+                                                        uint32_t* alive_count) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    const uint32_t n = uint32_t(f.width) * uint32_t(f.height);
+    bool live = false;
+    if (i < n) {
+        const int x = int(i % uint32_t(f.width)), y = int(i / uint32_t(f.width));
+        RenderRay r;
+        r.ray = pixel_ray(cam, float(x) + 0.5f, float(y) + 0.5f);
+        // A fixed mid-step offset, as render_view: an image must not change from one render to the next.
+        live = march_start(f.march, f.grid, r.ray, 0.5f, &r.cursor) && !r.cursor.done(f.march);
+        f.rays[i] = r;
+        f.dirs[i] = r.ray.d;
+        if (!live) write_pixel(f, i, Rgb(0.0f), 0.0f);
+    }
+    append(live, i, alive, alive_count);
+}
+
+__global__ void __launch_bounds__(k_block) march_kernel(RenderFrame f, const uint32_t* alive, uint32_t n, int k,
+                                                         RenderSlots slots) {
+    const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
+    if (a >= n) return;
+    const uint32_t pixel = alive[a];
+    RenderRay& r = f.rays[pixel];
+    MarchCursor c = r.cursor;
+    const size_t base = size_t(a) * size_t(k);
+    int j = 0;
+    march_continue(f.march, f.grid, r.ray, c, [&](const MarchSample& s) {
+        slots.pos[base + j] = s.position;
+        slots.dt[base + j] = s.dt;
+        ++j;
+        return j < k;
+    });
+    r.cursor = c;
+    slots.used[a] = uint8_t(j);
+    const Vec3 last = j > 0 ? slots.pos[base + j - 1] : Vec3(0.5f);
+    for (int q = 0; q < k; ++q) {
+        slots.pixel[base + q] = pixel;
+        if (q >= j) {  // unused slot: a harmless point, no weight
+            slots.pos[base + q] = last;
+            slots.dt[base + q] = 0.0f;
+        }
+    }
+}
+
+__global__ void __launch_bounds__(k_block) field_fp32_kernel(NerfFieldView field, RenderSlots slots,
+                                                              const Vec3* dirs, uint32_t m, float* sigma, Rgb* rgb) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= m) return;
+    field.query(slots.pos[i], dirs[slots.pixel[i]], &sigma[i], &rgb[i]);
+}
+
+__global__ void __launch_bounds__(k_block) composite_kernel(RenderFrame f, const uint32_t* alive, uint32_t n,
+                                                             int k, RenderSlots slots, const float* sigma,
+                                                             const Rgb* rgb, uint32_t* next,
+                                                             uint32_t* next_count) {
+    const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
+    bool go_on = false;
+    uint32_t pixel = 0;
+    if (a < n) {
+        pixel = alive[a];
+        RenderRay& r = f.rays[pixel];
+        float tau = r.tau;
+        Rgb color = r.color;
+        bool done = false;
+        const size_t base = size_t(a) * size_t(k);
+        const int used = slots.used[a];
+        // render_view.cpp's arithmetic, sample by sample.
+        for (int j = 0; j < used; ++j) {
+            const float t_before = expf(-tau);
+            const float od = sigma[base + j] * slots.dt[base + j];
+            color += rgb[base + j] * (t_before * -expm1f(-od));
+            tau += od;
+            if (expf(-tau) < f.min_transmittance) {
+                done = true;
+                break;
+            }
+        }
+        if (!done && r.cursor.done(f.march)) done = true;
+        if (done) {
+            write_pixel(f, pixel, color, tau);
+        } else {
+            r.tau = tau;
+            r.color = color;
+            go_on = true;
+        }
+    }
+    append(go_on, pixel, next, next_count);
+}
+
+unsigned blocks_for(uint32_t n) { return (n + k_block - 1) / k_block; }
+
+}  // namespace
+
+void render_init(const RenderFrame& f, const RayCamera& camera, uint32_t* alive, uint32_t* alive_count,
+                 cudaStream_t s) {
+    const uint32_t n = uint32_t(f.width) * uint32_t(f.height);
+    init_kernel<<<blocks_for(n), k_block, 0, s>>>(f, camera, alive, alive_count);
+    NPT_CUDA_CHECK_LAUNCH("render init_kernel");
+}
+
+void render_march(const RenderFrame& f, const uint32_t* alive, uint32_t n, int k, RenderSlots slots,
+                  cudaStream_t s) {
+    if (n == 0) return;
+    march_kernel<<<blocks_for(n), k_block, 0, s>>>(f, alive, n, k, slots);
+    NPT_CUDA_CHECK_LAUNCH("render march_kernel");
+}
+
+void render_field_fp32(const NerfFieldView& field, const RenderSlots& slots, const Vec3* dirs, uint32_t m,
+                       float* sigma, Rgb* rgb, cudaStream_t s) {
+    if (m == 0) return;
+    field_fp32_kernel<<<blocks_for(m), k_block, 0, s>>>(field, slots, dirs, m, sigma, rgb);
+    NPT_CUDA_CHECK_LAUNCH("render field_fp32_kernel");
+}
+
+void render_composite(const RenderFrame& f, const uint32_t* alive, uint32_t n, int k, RenderSlots slots,
+                      const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s) {
+    if (n == 0) return;
+    composite_kernel<<<blocks_for(n), k_block, 0, s>>>(f, alive, n, k, slots, sigma, rgb, next, next_count);
+    NPT_CUDA_CHECK_LAUNCH("render composite_kernel");
+}
+
+}  // namespace npt::nerf::cuda
