@@ -24,6 +24,7 @@
 #include "nerf/dataset.h"
 #include "nerf/eval_images.h"
 #include "nerf/model_file.h"
+#include "backend_option.h"
 #include "nerf/render_view.h"
 
 namespace npt::cli {
@@ -60,6 +61,7 @@ CLI::App* add_eval_command(CLI::App& app, EvalArgs& args) {
         ->check(CLI::Range(1, 64));
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads (default: 0)")
         ->check(CLI::Range(0, 4096));
+    add_backend_option(cmd, args.backend);
     return cmd;
 }
 
@@ -96,6 +98,7 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
 
     const auto t_start = std::chrono::steady_clock::now();
+    const nerf::Backend backend = resolve_backend(args.backend);
     const nerf::NerfModel model = nerf::load_model(args.model);
     const bool tty = stream_is_tty(stderr);
     nerf::Dataset data = load_dataset_with_progress(args.data, args.split, args.downscale, global.quiet);
@@ -103,8 +106,9 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     std::vector<size_t> views;
     for (size_t i = 0; i < data.cameras.size(); i += size_t(args.every)) views.push_back(i);
     const std::vector<std::string> names = output_names(data, views);
-    spdlog::info("evaluating {} of {} views at {}x{}", views.size(), data.cameras.size(), data.width,
-                 data.height);
+    const auto renderer = nerf::make_view_renderer(backend, model);
+    spdlog::info("evaluating {} of {} views at {}x{} on {}", views.size(), data.cameras.size(), data.width,
+                 data.height, renderer->device());
 
     nerf::ViewOptions view_options;  // white background, as the ground truth below
     const Rgb white(1.0f, 1.0f, 1.0f);
@@ -121,7 +125,7 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
         const uint64_t rows_before = uint64_t(k) * uint64_t(data.height);
         const auto t0 = std::chrono::steady_clock::now();
         const Image render =
-            nerf::render_view(model, data.cameras[i], view_options, [&](size_t done, size_t) {
+            renderer->render(data.cameras[i], view_options, [&](size_t done, size_t) {
                 progress.update(rows_before + done, total_rows);
                 return true;
             });

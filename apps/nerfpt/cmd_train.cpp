@@ -16,6 +16,7 @@
 #include "interrupt.h"
 #include "nerf/dataset.h"
 #include "nerf/model_file.h"
+#include "backend_option.h"
 #include "nerf/trainer.h"
 
 namespace npt::cli {
@@ -26,15 +27,16 @@ constexpr uint64_t k_default_steps = 3000;
 }
 
 CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
-    CLI::App* cmd = app.add_subcommand("train", "Train a NeRF from posed images (transforms.json) on the CPU");
+    CLI::App* cmd = app.add_subcommand("train", "Train a NeRF from posed images (transforms.json) on a GPU or the CPU");
     cmd->footer(
         "The model follows instant-ngp's NeRF: a 16-level hash grid (2^19 entries per level, 2 features,\n"
         "base resolution 16, finest 2048 x aabb_scale), a 1x64 density MLP with 16 outputs, SH degree 4 of\n"
         "the view direction, a 2x64 colour MLP; occupancy grid 128^3 per cascade; Adam lr 1e-2; all\n"
         "changeable with --config (docs/formats.md lists every field).\n"
         "--steps and --time count the whole training, across resumes. Without either, 3000 steps.\n"
-        "A checkpoint is written every training.checkpoint_interval steps and on Ctrl-C (a second\n"
-        "Ctrl-C quits at once); --resume continues from it exactly.\n"
+        "A checkpoint is written every training.checkpoint_interval steps (on a GPU: at most every 60 s\n"
+        "unless --checkpoint-every is given) and on Ctrl-C (a second Ctrl-C quits at once); --resume\n"
+        "continues from it (exactly on the CPU). A model trained on either backend resumes on the other.\n"
         "Example: nerfpt train ../shared/data/nerf_synthetic/lego -o lego.npt --downscale 2 --time 600");
     cmd->add_option("DATA", args.data,
                     "A transforms.json, or a folder holding transforms.json or transforms_{SPLIT}.json")
@@ -58,6 +60,7 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
     cmd->add_option("--checkpoint-every", args.checkpoint_every,
                     "Steps between checkpoints (default: the config's, 500)")
         ->check(CLI::Range(1, 100000000));
+    add_backend_option(cmd, args.backend);
     cmd->add_flag("--resume", args.resume, "Continue training the model in --output where it stopped");
     cmd->add_flag("--force", args.force, "Overwrite --output if it exists (without --resume)")
         ->excludes(cmd->get_option("--resume"));
@@ -141,8 +144,17 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
                  data.width, data.height, data.aabb_scale, model.params.size(),
                  args.resume ? fmt::format(", resuming at step {}", model.training->adam.step) : "");
 
-    nerf::Trainer trainer(model, data);
+    const nerf::Backend backend = resolve_backend(args.backend);
+    std::unique_ptr<nerf::TrainerBackend> trainer_ptr = nerf::make_trainer(backend, model, data);
+    nerf::TrainerBackend& trainer = *trainer_ptr;
+    spdlog::info("training on {}", trainer.device());
+    // A GPU step takes milliseconds: writing a checkpoint (hundreds of MB) every interval of steps would cost
+    // more than the training, so without an explicit --checkpoint-every a GPU saves at most once a minute.
+    const double min_checkpoint_seconds =
+        backend == nerf::Backend::cuda && args.checkpoint_every == 0 ? 60.0 : 0.0;
+    double last_checkpoint = Progress::steady_seconds();
     auto save = [&] {
+        last_checkpoint = Progress::steady_seconds();
         trainer.sync_model();
         auto no_interrupt = interrupts.hold();  // the file is complete, or an interrupt waits for it
         nerf::save_model(out, model, true);
@@ -180,12 +192,15 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
             interrupted = true;
             break;
         }
-        if (trainer.steps_done() % interval == 0) save();
+        if (trainer.steps_done() % interval == 0 &&
+            Progress::steady_seconds() - last_checkpoint >= min_checkpoint_seconds)
+            save();
     }
     progress.update(stats, 1.0, rays_ema, model.training->elapsed_seconds, true);
     progress.finish();
     const auto& pt = phase_total;
-    spdlog::debug("time per phase: march {:.1f} s, field forward {:.1f} s, loss {:.1f} s, MLP backward {:.1f} s, "
+    if (backend == nerf::Backend::cpu)
+        spdlog::debug("time per phase: march {:.1f} s, field forward {:.1f} s, loss {:.1f} s, MLP backward {:.1f} s, "
                   "hash-grid backward {:.1f} s, Adam {:.1f} s, occupancy grid {:.1f} s",
                   pt.march, pt.forward, pt.loss, pt.backward, pt.grid_backward, pt.adam, pt.occupancy);
     save();

@@ -62,6 +62,40 @@ void Trainer::sync_model() {
 
 StepStats Trainer::step() {
     const auto t0 = std::chrono::steady_clock::now();
+    StepStats stats = compute_gradient();
+    TrainingState& st = *m_model.training;
+    const uint64_t step = m_adam.state().step;
+    auto lap = [last = std::chrono::steady_clock::now()]() mutable {
+        const auto now = std::chrono::steady_clock::now();
+        const double s = std::chrono::duration<double>(now - last).count();
+        last = now;
+        return s;
+    };
+
+    // 6. Adam, then the occupancy grid with the new parameters.
+    m_adam.step(st.params.data(), m_grads.data());
+    stats.phases.adam = lap();
+    stats.step = m_adam.state().step;
+    if (step % m_occupancy_interval == 0) {
+        update_occupancy(step);
+        stats.occupancy_updated = true;
+    }
+    stats.phases.occupancy = lap();
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    st.elapsed_seconds += stats.seconds;
+    return stats;
+}
+
+StepStats Trainer::gradient(std::vector<float>& grads) {
+    const uint32_t rays = m_model.training->rays_per_step;
+    StepStats stats = compute_gradient();
+    m_model.training->rays_per_step = rays;  // nothing changes: the next step sees the same batch
+    grads = m_grads;
+    return stats;
+}
+
+StepStats Trainer::compute_gradient() {
+    const auto t0 = std::chrono::steady_clock::now();
     auto lap = [last = t0]() mutable {
         const auto now = std::chrono::steady_clock::now();
         const double s = std::chrono::duration<double>(now - last).count();
@@ -215,16 +249,6 @@ StepStats Trainer::step() {
     accumulate_grid_gradient(m_layout, chunk_pos, chunk_ptr, grads);
     stats.phases.grid_backward = lap();
 
-    // 6. Adam, then the occupancy grid with the new parameters.
-    m_adam.step(st.params.data(), grads);
-    stats.phases.adam = lap();
-    stats.step = m_adam.state().step;
-    if (step % m_occupancy_interval == 0) {
-        update_occupancy(step);
-        stats.occupancy_updated = true;
-    }
-    stats.phases.occupancy = lap();
-
     // The next step's ray count aims at a full batch given this step's samples per ray.
     const double per_ray = n_rays > 0 ? double(total_marched) / n_rays : 1.0;
     st.rays_per_step = uint32_t(std::clamp<double>(double(budget) / std::max(per_ray, 1.0), 64.0,
@@ -241,7 +265,6 @@ StepStats Trainer::step() {
     stats.samples = uint32_t(n_samples);
     stats.marched = uint32_t(n_samples);
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    st.elapsed_seconds += stats.seconds;
     return stats;
 }
 

@@ -38,11 +38,15 @@ public:
 
     StepStats step();
     uint64_t steps_done() const { return m_adam.state().step; }
+    // The gradient step() would apply next (mean loss over the batch's rays, before L2), into grads (the
+    // model's layout); the model and the optimizer do not change. For tests against the GPU trainer.
+    StepStats gradient(std::vector<float>& grads);
 
     // Copies the optimizer state and the averaged parameters into the model, ready to save.
     void sync_model();
 
 private:
+    StepStats compute_gradient();  // marching to the hash-grid backward: fills m_grads
     void update_occupancy(uint64_t step);
 
     NerfModel& m_model;

@@ -2,6 +2,8 @@
 
 #include <tbb/info.h>
 
+#include <chrono>
+
 #include "core/error.h"
 
 #if NERFPT_HAVE_CUDA
@@ -57,6 +59,11 @@ class CpuViewRenderer final : public ViewRendererBackend {
                  const std::function<bool(size_t, size_t)>& progress) override {
         return render_view(m_model, camera, options, progress);
     }
+    double render_ms(const Camera& camera, const ViewOptions& options) override {
+        const auto t0 = std::chrono::steady_clock::now();
+        render_view(m_model, camera, options);
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    }
     std::string device() const override { return cpu_description(); }
 
   private:
@@ -71,6 +78,7 @@ class GpuTrainer final : public TrainerBackend {
     uint64_t steps_done() const override { return m_trainer.steps_done(); }
     void sync_model() override { m_trainer.sync_model(); }
     std::string device() const override { return m_trainer.device_name(); }
+    size_t device_memory_bytes() const override { return m_trainer.peak_device_bytes(); }
 
   private:
     cuda::CudaTrainer m_trainer;
@@ -85,6 +93,9 @@ class GpuViewRenderer final : public ViewRendererBackend {
         Image img = m_renderer.render(camera, options);
         if (progress && !progress(size_t(camera.height), size_t(camera.height))) throw Error("interrupted");
         return img;
+    }
+    double render_ms(const Camera& camera, const ViewOptions& options) override {
+        return m_renderer.render_timed(camera, options);
     }
     std::string device() const override { return m_renderer.device_name(); }
 

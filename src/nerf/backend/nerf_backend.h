@@ -42,6 +42,7 @@ class TrainerBackend {
     // Parameters, optimizer state and occupancy grid into the model (before saving or evaluating it).
     virtual void sync_model() = 0;
     virtual std::string device() const = 0;  // "CPU, 2 threads" or the GPU's name
+    virtual size_t device_memory_bytes() const { return 0; }  // GPU memory in use after setup (0 on the CPU)
 };
 
 std::unique_ptr<TrainerBackend> make_trainer(Backend backend, NerfModel& model, const Dataset& data);
@@ -54,6 +55,8 @@ class ViewRendererBackend {
     // RGBA as render_view returns it; progress as render_view's (the GPU calls it once at the end).
     virtual Image render(const Camera& camera, const ViewOptions& options,
                          const std::function<bool(size_t, size_t)>& progress = {}) = 0;
+    // The render alone (no image download), in milliseconds: GPU time from CUDA events, wall time on the CPU.
+    virtual double render_ms(const Camera& camera, const ViewOptions& options) = 0;
     virtual std::string device() const = 0;
 };
 

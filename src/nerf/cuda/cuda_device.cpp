@@ -2,7 +2,7 @@
 
 #include <cuda_runtime.h>
 
-#include <cstdio>
+#include <fmt/format.h>
 
 #include "core/error.h"
 
@@ -51,11 +51,9 @@ std::string require_cuda_device() {
     if (cudaSetDevice(0) != cudaSuccess) throw Error("--backend cuda: cannot select GPU 0");
     int driver = 0;
     cudaDriverGetVersion(&driver);
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "%s (sm_%d%d, %d SMs, %.1f GiB, driver CUDA %d.%d)", prop.name, prop.major,
-                  prop.minor, prop.multiProcessorCount, double(prop.totalGlobalMem) / (1024.0 * 1024.0 * 1024.0),
-                  driver / 1000, (driver % 1000) / 10);
-    return buf;
+    return fmt::format("{} (sm_{}{}, {} SMs, {:.1f} GiB, driver CUDA {}.{})", prop.name, prop.major, prop.minor,
+                       prop.multiProcessorCount, double(prop.totalGlobalMem) / (1024.0 * 1024.0 * 1024.0),
+                       driver / 1000, (driver % 1000) / 10);
 }
 
 }  // namespace npt::nerf::cuda

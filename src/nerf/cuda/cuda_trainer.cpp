@@ -77,9 +77,15 @@ struct CudaTrainer::Impl {
     DeviceBuffer<StepCounters> counters;
     StepCounters* host_counters = nullptr;
     size_t used_bytes = 0;
+    // Phase boundaries of a step (CUDA events), for StepStats::phases.
+    enum Mark { m_begin, m_marched, m_evaluated, m_composited, m_backward, m_grid_backward, m_adam, m_occupancy, k_marks };
+    cudaEvent_t marks[k_marks] = {};
+    void mark(Mark m) { cuda_check(cudaEventRecord(marks[m], stream), "cudaEventRecord"); }
 
     Impl(NerfModel& m, const Dataset& d) : model(m), data(d) {}
     ~Impl() {
+        for (cudaEvent_t e : marks)
+            if (e) cudaEventDestroy(e);
         if (host_counters) cudaFreeHost(host_counters);
         if (stream) cudaStreamDestroy(stream);
     }
@@ -164,6 +170,7 @@ void CudaTrainer::Impl::setup() {
     c_d_enc.allocate(size_t(capacity) * k_mlp_inputs, "the training batch", k_lower_batch);
     counters.allocate(1);
     cuda_check(cudaMallocHost(&host_counters, sizeof(StepCounters)), "cudaMallocHost");
+    for (cudaEvent_t& e : marks) cuda_check(cudaEventCreate(&e), "cudaEventCreate");
     if (st.rays_per_step == 0) st.rays_per_step = std::max(k_min_rays, batch / 512);
     cuda_check(cudaStreamSynchronize(stream), "uploading the model");
     size_t free_b = 0, total_b = 0;
@@ -172,6 +179,7 @@ void CudaTrainer::Impl::setup() {
 }
 
 void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
+    mark(m_begin);
     cuda_check(cudaMemsetAsync(counters.data(), 0, sizeof(StepCounters), stream), "cudaMemsetAsync");
     StepCounters* ctr = counters.data();
     RayBuffers rays{ray_first.data(), ray_count.data(), ray_target.data(), ray_background.data(), ray_dir.data()};
@@ -188,6 +196,7 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     ma.samples = samples;
     ma.counters = ctr;
     march_training_rays(ma, stream);
+    mark(m_marched);
 
     // Every marched sample: encoding and the network, inference only.
     const float* grid = params.data() + layout.grid_offset;
@@ -207,6 +216,7 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     ia.sigma = s_sigma.data();
     ia.rgb = s_rgb.data();
     mlp_inference(ia, false, stream);
+    mark(m_evaluated);
 
     CompositeLossArgs ca;
     ca.n_rays = n_rays;
@@ -219,6 +229,7 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     ca.compact = {c_pos.data(), c_ray.data(), c_d_sigma.data(), c_d_rgb.data(), capacity};
     ca.counters = ctr;
     composite_loss(ca, stream);
+    mark(m_composited);
 
     // The compacted samples: forward with activations, backward, gradients.
     grads.zero_async(stream);
@@ -240,7 +251,9 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     ta.d_encoded = c_d_enc.data();
     ta.d_weights = grads.data() + layout.density_offset;
     mlp_train(ta, stream);
+    mark(m_backward);
     hash_backward(hc, c_d_enc.data(), grads.data() + layout.grid_offset, stream);
+    mark(m_grid_backward);
 }
 
 StepStats CudaTrainer::Impl::stats_after(uint32_t n_rays, double seconds) {
@@ -298,6 +311,7 @@ StepStats CudaTrainer::step() {
     a.ema_decay = I.opt.ema_decay;
     a.nonfinite = &I.counters.data()->nonfinite;
     adam_step(a, I.stream);
+    I.mark(Impl::m_adam);
 
     bool updated = false;
     if (step % I.occupancy_interval == 0) {
@@ -308,6 +322,7 @@ StepStats CudaTrainer::step() {
                             warmup, seed, I.march.min_step, I.stream);
         updated = true;
     }
+    I.mark(Impl::m_occupancy);
     cuda_check(cudaMemcpyAsync(I.host_counters, I.counters.data(), sizeof(StepCounters), cudaMemcpyDeviceToHost,
                                I.stream),
                "cudaMemcpyAsync");
@@ -327,6 +342,18 @@ StepStats CudaTrainer::step() {
     st.elapsed_seconds += seconds;
     StepStats s = I.stats_after(n_rays, seconds);
     s.occupancy_updated = updated;
+    auto between = [&](Impl::Mark a, Impl::Mark b) {
+        float ms = 0;
+        cudaEventElapsedTime(&ms, I.marks[a], I.marks[b]);
+        return double(ms) * 1e-3;
+    };
+    s.phases.march = between(Impl::m_begin, Impl::m_marched);
+    s.phases.forward = between(Impl::m_marched, Impl::m_evaluated);
+    s.phases.loss = between(Impl::m_evaluated, Impl::m_composited);
+    s.phases.backward = between(Impl::m_composited, Impl::m_backward);
+    s.phases.grid_backward = between(Impl::m_backward, Impl::m_grid_backward);
+    s.phases.adam = between(Impl::m_grid_backward, Impl::m_adam);
+    s.phases.occupancy = between(Impl::m_adam, Impl::m_occupancy);
     return s;
 }
 
