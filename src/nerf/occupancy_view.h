@@ -18,6 +18,12 @@ struct OccupancyGridView {
     const uint8_t* occupied = nullptr;  // one byte per cell, 0 or 1
     int cascades = 1;
     int resolution = 128;
+    // Instead of `occupied` (the GPU's form): one bit per cell, cell i at bit i % 32 of word i / 32. 8x smaller,
+    // so that a march's dependent lookups stay in the L1 cache.
+    const uint32_t* occupied_bits = nullptr;
+
+    // False: every cell counts as occupied.
+    NPT_HD NPT_INLINE bool has_occupancy() const { return occupied != nullptr || occupied_bits != nullptr; }
 
     // The smallest cascade that contains p (clamped to the last one).
     NPT_HD NPT_INLINE int cascade_of(Vec3 p) const {
@@ -35,8 +41,11 @@ struct OccupancyGridView {
         const float size = cascade_size(c);
         const float lo = 0.5f - 0.5f * size;
         int64_t idx[3];
+        // Cells per unit, one multiplication: equal to (p - lo) / size * resolution for power-of-two sizes and
+        // resolutions (every factor exact), the cheap form of the same cell on CPU and GPU alike.
+        const float cells_per_unit = float(resolution) / size;
         for (int a = 0; a < 3; ++a) {
-            const float u = (p[a] - lo) / size * float(resolution);
+            const float u = (p[a] - lo) * cells_per_unit;
             if (!(u >= 0.0f) || u >= float(resolution)) return -1;
             idx[a] = int64_t(u);
         }
@@ -45,7 +54,9 @@ struct OccupancyGridView {
     }
     NPT_HD NPT_INLINE bool is_occupied(Vec3 p, int c) const {
         const int64_t i = cell_index(p, c);
-        return i >= 0 && occupied[i] != 0;
+        if (i < 0) return false;
+        if (occupied_bits) return (occupied_bits[i >> 5] >> (i & 31)) & 1u;
+        return occupied[i] != 0;
     }
 };
 

@@ -143,7 +143,7 @@ NPT_HD inline bool march_start(const MarchParams& mp, const OccupancyGridView& g
 
 // Continues the march: calls visit(MarchSample) for each sample in order until visit returns false (the
 // cursor then stands after that sample) or the march is done. Samples lie in occupied cells only; their dt is
-// the step taken at them. A view with no occupancy array (occupied == nullptr) counts every cell as occupied.
+// the step taken at them. A view without occupancy (has_occupancy() false) counts every cell as occupied.
 template <typename Visit>
 NPT_HD inline void march_continue(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
                                   MarchCursor& c, Visit&& visit) {
@@ -152,7 +152,7 @@ NPT_HD inline void march_continue(const MarchParams& mp, const OccupancyGridView
         const Vec3 p = ray.at(t);
         const float dt = march_step(mp, t);
         const int cas = march_cascade(grid, p, dt);
-        if (grid.occupied == nullptr || grid.is_occupied(p, cas)) {
+        if (!grid.has_occupancy() || grid.is_occupied(p, cas)) {
             ++c.count;
             const bool more = visit(MarchSample{p, t, dt});
             const float next = t + dt;

@@ -33,7 +33,7 @@ struct CudaViewRenderer::Impl {
     cudaStream_t stream = nullptr;
     DeviceBuffer<float> params;
     DeviceBuffer<__half> mlp_half;
-    DeviceBuffer<uint8_t> occupied;
+    DeviceBuffer<uint32_t> occupied;  // bit field
     // Per frame (resized with the image).
     int width = 0, height = 0;
     DeviceBuffer<RenderRay> rays;
@@ -45,6 +45,7 @@ struct CudaViewRenderer::Impl {
     DeviceBuffer<float> slot_dt, slot_sigma;
     DeviceBuffer<uint32_t> slot_pixel;
     DeviceBuffer<uint8_t> slot_used;
+    DeviceBuffer<uint32_t> slot_first;
     DeviceBuffer<Rgb> slot_rgb;
     DeviceBuffer<__half> slot_enc;
     uint32_t* host_count = nullptr;
@@ -75,6 +76,7 @@ void CudaViewRenderer::Impl::resize(int w, int h) {
         slot_sigma.allocate(slots, "the sample slots", "--res");
         slot_pixel.allocate(slots, "the sample slots", "--res");
         slot_used.allocate(slots, "the sample slots", "--res");
+        slot_first.allocate(slots, "the sample slots", "--res");
         slot_rgb.allocate(slots, "the sample slots", "--res");
         if (precision == Precision::fp16) slot_enc.allocate(slots * k_mlp_inputs, "the sample slots", "--res");
     }
@@ -100,18 +102,20 @@ void CudaViewRenderer::Impl::run(const Camera& camera, const ViewOptions& option
     f.height = height;
     f.background = options.background;
     f.march = march;
-    f.grid = {occupied.data(), model.occupancy.cascades(), model.occupancy.resolution()};
+    f.grid = {nullptr, model.occupancy.cascades(), model.occupancy.resolution(), occupied.data()};
     f.min_transmittance = model.config.march.min_transmittance;
-    RenderSlots slots{slot_pos.data(), slot_dt.data(), slot_pixel.data(), slot_used.data()};
+    RenderSlots slots{slot_pos.data(), slot_dt.data(), slot_pixel.data(), slot_first.data(), slot_used.data(),
+                      counts.data() + 2};
 
-    cuda_check(cudaMemsetAsync(counts.data(), 0, 2 * sizeof(uint32_t), stream), "cudaMemsetAsync");
+    cuda_check(cudaMemsetAsync(counts.data(), 0, 3 * sizeof(uint32_t), stream), "cudaMemsetAsync");
     render_init(f, make_ray_camera(camera, model.world_to_model), alive[0].data(), counts.data(), stream);
     uint32_t n = read_count(0);
     int cur = 0;
     const uint32_t capacity = uint32_t(slot_pos.size());  // >= one slot per pixel (resize)
     for (int k = k_first_round; n > 0; k = std::min(2 * k, k_max_round)) {
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / n)));
-        const uint32_t m = n * uint32_t(kk);
+        const uint32_t m = n * uint32_t(kk);  // samples this round at most
+        cuda_check(cudaMemsetAsync(slots.count, 0, sizeof(uint32_t), stream), "cudaMemsetAsync");
         render_march(f, alive[cur].data(), n, kk, slots, stream);
         if (precision == Precision::fp32) {
             const NerfFieldView field(layout, params.data());
@@ -120,7 +124,7 @@ void CudaViewRenderer::Impl::run(const Camera& camera, const ViewOptions& option
             HashGridArgs h;
             h.layout = layout;
             h.positions = slot_pos.data();
-            h.n_host = m;
+            h.count = slots.count;
             h.capacity = capacity;
             hash_encode(h, params.data() + layout.grid_offset, slot_enc.data(), stream);
             MlpInferenceArgs a;
@@ -128,7 +132,7 @@ void CudaViewRenderer::Impl::run(const Camera& camera, const ViewOptions& option
             a.encoded = slot_enc.data();
             a.sample_ray = slot_pixel.data();
             a.ray_dir = dirs.data();
-            a.n_host = m;
+            a.count = slots.count;
             a.capacity = capacity;
             a.sigma = slot_sigma.data();
             a.rgb = slot_rgb.data();
@@ -161,9 +165,13 @@ CudaViewRenderer::CudaViewRenderer(const NerfModel& model, Precision precision)
         cuda_check(cudaMemset(I.mlp_half.data(), 0, I.mlp_half.bytes()), "cudaMemset");
         to_half(I.params.data(), uint32_t(k_mlp_param_count), I.mlp_half.data(), I.stream);
     }
+    // The marches read the occupancy as a bit field (OccupancyGridView::occupied_bits).
     const OccupancyGridView g = model.occupancy.view();
-    I.occupied.upload(g.occupied, model.occupancy.cell_count(), "the occupancy grid", "occupancy.resolution");
-    I.counts.allocate(2);
+    std::vector<uint32_t> bits((model.occupancy.cell_count() + 31) / 32, 0u);
+    for (size_t i = 0; i < model.occupancy.cell_count(); ++i)
+        if (g.occupied[i]) bits[i >> 5] |= 1u << (i & 31);
+    I.occupied.upload(bits, "the occupancy grid", "occupancy.resolution");
+    I.counts.allocate(3);  // live rays (two lists), samples of the round
     cuda_check(cudaMallocHost(&I.host_count, sizeof(uint32_t)), "cudaMallocHost");
     cuda_check(cudaStreamSynchronize(I.stream), "uploading the model");
 }

@@ -18,12 +18,14 @@ DeviceOccupancy::DeviceOccupancy(const OccupancyGrid& host, float threshold, cud
     m_estimate.allocate(d.size(), "the occupancy grid", "occupancy.resolution");
     m_occupied.allocate(d.size(), "the occupancy grid", "occupancy.resolution");
     m_list.allocate(d.size(), "the occupancy grid", "occupancy.resolution");
+    m_bits.allocate((d.size() + 31) / 32, "the occupancy grid", "occupancy.resolution");
     m_count.allocate(1);
     m_sum.allocate(1);
     m_estimate.zero_async(s);
     m_dev.density = m_density.data();
     m_dev.estimate = m_estimate.data();
     m_dev.occupied = m_occupied.data();
+    m_dev.occupied_bits = m_bits.data();
     m_dev.occupied_list = m_list.data();
     m_dev.occupied_count = m_count.data();
     m_dev.density_sum = m_sum.data();

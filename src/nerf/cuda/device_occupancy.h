@@ -21,7 +21,8 @@ class DeviceOccupancy {
     // with `threshold` (as OccupancyGrid::set_density does).
     DeviceOccupancy(const OccupancyGrid& host, float threshold, cudaStream_t s);
 
-    OccupancyGridView view() const { return {m_occupied.data(), m_dev.cascades, m_dev.resolution}; }
+    // The bit-field form (see OccupancyGridView::occupied_bits).
+    OccupancyGridView view() const { return {nullptr, m_dev.cascades, m_dev.resolution, m_bits.data()}; }
     uint32_t cells() const { return m_dev.cells; }
 
     // One update with the current network: `grid_params` (fp32 hash table) and `mlp_half` (fp16 weights).
@@ -35,6 +36,7 @@ class DeviceOccupancy {
     OccupancyDevice m_dev;
     gpu::DeviceBuffer<float> m_density, m_estimate;
     gpu::DeviceBuffer<uint8_t> m_occupied;
+    gpu::DeviceBuffer<uint32_t> m_bits;
     gpu::DeviceBuffer<uint32_t> m_list, m_count;
     gpu::DeviceBuffer<double> m_sum;
     // Points of one chunk of an update.

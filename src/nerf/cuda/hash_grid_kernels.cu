@@ -1,5 +1,7 @@
 #include "nerf/cuda/hash_grid_kernels.h"
 
+#include <algorithm>
+
 #include "core/cuda/device_buffer.h"
 #include "nerf/hash_encoding.h"
 
@@ -55,10 +57,20 @@ __device__ __forceinline__ void add_features(float* p, const float* v) {
 }
 
 template <int F>
+__device__ __forceinline__ void encode_one(const HashGridArgs& a, const HashLevels& levels, const float* grid,
+                                           __half* out, uint32_t i);
+
+template <int F>
 __global__ void __launch_bounds__(k_block) hash_encode_kernel(HashGridArgs a, HashLevels levels,
                                                               const float* grid, __half* out) {
-    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= count_of(a)) return;
+    const uint32_t n = count_of(a);
+    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < n; i += gridDim.x * blockDim.x)
+        encode_one<F>(a, levels, grid, out, i);
+}
+
+template <int F>
+__device__ __forceinline__ void encode_one(const HashGridArgs& a, const HashLevels& levels, const float* grid,
+                                           __half* out, uint32_t i) {
     const HashGridConfig& cfg = a.layout.grid;
     const Vec3 p = a.layout.grid_position(a.positions[i]);
     constexpr int n_levels = k_dims / F;
@@ -87,40 +99,107 @@ __global__ void __launch_bounds__(k_block) hash_encode_kernel(HashGridArgs a, Ha
     for (int q = 0; q < k_dims / 8; ++q) dst[q] = src[q];
 }
 
+// Sums v over runs of consecutive lanes with the same idx (a segmented scan over the warp); returns true in
+// the first lane of each run, which then holds its run's sum. Every lane of the warp must call it.
 template <int F>
-__global__ void __launch_bounds__(k_block) hash_backward_kernel(HashGridArgs a, HashLevels levels,
-                                                                const float* d_enc, float* d_grid) {
-    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= count_of(a)) return;
-    const HashGridConfig& cfg = a.layout.grid;
-    const Vec3 p = a.layout.grid_position(a.positions[i]);
-    constexpr int n_levels = k_dims / F;
-    float d[k_dims];
-    const float4* src = reinterpret_cast<const float4*>(d_enc + size_t(i) * k_dims);
+__device__ __forceinline__ bool warp_run_sum(uint32_t idx, float (&v)[F]) {
+    const int lane = threadIdx.x & 31;
+    const uint32_t prev = __shfl_up_sync(0xffffffffu, idx, 1);
+    const bool head = lane == 0 || prev != idx;
+    int seg = head ? lane : 0;  // the first lane of this lane's run: an inclusive max-scan of the heads
 #pragma unroll
-    for (int q = 0; q < k_dims / 4; ++q) {
-        const float4 v = src[q];
-        d[4 * q] = v.x, d[4 * q + 1] = v.y, d[4 * q + 2] = v.z, d[4 * q + 3] = v.w;
+    for (int off = 1; off < 32; off <<= 1) {
+        const int o = __shfl_up_sync(0xffffffffu, seg, off);
+        if (lane >= off) seg = max(seg, o);
     }
 #pragma unroll
-    for (int l = 0; l < n_levels; ++l) {
-        bool any = false;
+    for (int off = 1; off < 32; off <<= 1) {
+        const int s = __shfl_down_sync(0xffffffffu, seg, off);
+        float o[F];
 #pragma unroll
-        for (int k = 0; k < F; ++k) any |= d[l * F + k] != 0.0f;
-        if (!any) continue;  // samples past a ray's stop and dead ReLUs give exact zeros: no atomics for them
-        HashCorner corners[8];
-        hash_level_corners(cfg, levels.level[l], l, p, corners);
+        for (int k = 0; k < F; ++k) o[k] = __shfl_down_sync(0xffffffffu, v[k], off);
+        if (lane + off < 32 && s == seg)
 #pragma unroll
-        for (int c = 0; c < 8; ++c) {
-            float v[F];
+            for (int k = 0; k < F; ++k) v[k] += o[k];
+    }
+    return head;
+}
+
+// One thread per sample. On coarse levels (bit set in `merge_levels`) consecutive samples of a ray share their
+// cell's corners, and thousands of atomics on the same few entries serialise: there each warp first sums the
+// runs of lanes that hit the same entry and adds each run once.
+template <int F>
+__global__ void __launch_bounds__(k_block) hash_backward_kernel(HashGridArgs a, HashLevels levels,
+                                                                const float* d_enc, float* d_grid,
+                                                                uint32_t merge_levels) {
+    const uint32_t n = count_of(a);
+    const uint32_t stride = gridDim.x * blockDim.x;
+    // Whole warps iterate together (the merged levels shuffle across the warp); lanes past n carry zeros.
+    const uint32_t n_warps = (n + 31) / 32 * 32;
+    const HashGridConfig& cfg = a.layout.grid;
+    constexpr int n_levels = k_dims / F;
+    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < n_warps; i += stride) {
+        const bool valid = i < n;
+        const Vec3 p = valid ? a.layout.grid_position(a.positions[i]) : Vec3(0.0f);
+        float d[k_dims];
+        if (valid) {
+            const float4* src = reinterpret_cast<const float4*>(d_enc + size_t(i) * k_dims);
 #pragma unroll
-            for (int k = 0; k < F; ++k) v[k] = corners[c].weight * d[l * F + k];
-            add_features<F>(d_grid + size_t(corners[c].index) * F, v);
+            for (int q = 0; q < k_dims / 4; ++q) {
+                const float4 v = src[q];
+                d[4 * q] = v.x, d[4 * q + 1] = v.y, d[4 * q + 2] = v.z, d[4 * q + 3] = v.w;
+            }
+        } else {
+#pragma unroll
+            for (int q = 0; q < k_dims; ++q) d[q] = 0.0f;
+        }
+#pragma unroll
+        for (int l = 0; l < n_levels; ++l) {
+            bool any = false;
+#pragma unroll
+            for (int k = 0; k < F; ++k) any |= d[l * F + k] != 0.0f;
+            const bool merge = (merge_levels >> l) & 1u;
+            // Samples past a ray's stop and dead ReLUs give exact zeros: no atomics for them.
+            if (merge ? !__any_sync(0xffffffffu, any) : !any) continue;
+            HashCorner corners[8];
+            hash_level_corners(cfg, levels.level[l], l, p, corners);
+#pragma unroll
+            for (int c = 0; c < 8; ++c) {
+                float v[F];
+#pragma unroll
+                for (int k = 0; k < F; ++k) v[k] = corners[c].weight * d[l * F + k];
+                if (merge) {
+                    if (!warp_run_sum<F>(corners[c].index, v)) continue;
+                    bool nonzero = false;
+#pragma unroll
+                    for (int k = 0; k < F; ++k) nonzero |= v[k] != 0.0f;
+                    if (!nonzero) continue;
+                }
+                add_features<F>(d_grid + size_t(corners[c].index) * F, v);
+            }
         }
     }
 }
 
-int blocks_for(uint32_t n) { return int((n + k_block - 1) / k_block); }
+// A grid-stride loop over the samples: enough blocks to fill the GPU, never one per sample of the capacity.
+int blocks_for(uint32_t n) {
+    static const int limit = [] {
+        int dev = 0, sms = 0;
+        cudaGetDevice(&dev);
+        cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev);
+        return std::max(1, sms) * 16;
+    }();
+    return std::max(1, std::min(int((n + k_block - 1) / k_block), limit));
+}
+
+// Levels whose cells are at least 1/256 of the unit cube: several consecutive samples of a ray (steps of at
+// least sqrt(3)/1024) share a cell there, so their gradients are merged per warp before the atomics.
+uint32_t merge_levels_of(const HashGridConfig& cfg) {
+    uint32_t mask = 0;
+    for (int l = 0; l < cfg.levels && l < 32; ++l)
+        if (hash_level(cfg, l).scale <= 256.0f) mask |= 1u << l;
+    return mask;
+}
 
 void check_config(const NerfLayout& l) {
     const int f = l.grid.features_per_level;
@@ -150,11 +229,12 @@ void hash_backward(const HashGridArgs& a, const float* d_encoded, float* d_grid_
     if (a.capacity == 0) return;
     const HashLevels levels = hash_levels(a.layout.grid);
     const int blocks = blocks_for(a.capacity);
+    const uint32_t merge = merge_levels_of(a.layout.grid);
     switch (a.layout.grid.features_per_level) {
-        case 1: hash_backward_kernel<1><<<blocks, k_block, 0, s>>>(a, levels, d_encoded, d_grid_params); break;
-        case 2: hash_backward_kernel<2><<<blocks, k_block, 0, s>>>(a, levels, d_encoded, d_grid_params); break;
-        case 4: hash_backward_kernel<4><<<blocks, k_block, 0, s>>>(a, levels, d_encoded, d_grid_params); break;
-        default: hash_backward_kernel<8><<<blocks, k_block, 0, s>>>(a, levels, d_encoded, d_grid_params); break;
+        case 1: hash_backward_kernel<1><<<blocks, k_block, 0, s>>>(a, levels, d_encoded, d_grid_params, merge); break;
+        case 2: hash_backward_kernel<2><<<blocks, k_block, 0, s>>>(a, levels, d_encoded, d_grid_params, merge); break;
+        case 4: hash_backward_kernel<4><<<blocks, k_block, 0, s>>>(a, levels, d_encoded, d_grid_params, merge); break;
+        default: hash_backward_kernel<8><<<blocks, k_block, 0, s>>>(a, levels, d_encoded, d_grid_params, merge); break;
     }
     NPT_CUDA_CHECK_LAUNCH("hash_backward_kernel");
 }

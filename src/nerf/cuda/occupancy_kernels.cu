@@ -85,6 +85,8 @@ __global__ void threshold_kernel(OccupancyDevice g, float threshold) {
         g.occupied[i] = occ ? 1 : 0;
     }
     const unsigned mask = __ballot_sync(0xffffffffu, occ);
+    // A warp covers 32 consecutive cells starting at a multiple of 32: one word of the bit field.
+    if ((threadIdx.x & 31) == 0 && i < g.cells) g.occupied_bits[i >> 5] = mask;
     if (!occ) return;  // the shuffle below is among the lanes in mask only
     const int lane = threadIdx.x & 31;
     const int leader = __ffs(mask) - 1;

@@ -16,6 +16,7 @@ namespace npt::nerf::cuda {
 struct OccupancyDevice {
     float* density = nullptr;         // cascades * R^3
     uint8_t* occupied = nullptr;
+    uint32_t* occupied_bits = nullptr;  // the same flags, one bit per cell (what the marches read)
     float* estimate = nullptr;        // scratch: the largest new estimate per cell, 0 = none
     uint32_t* occupied_list = nullptr;  // indices of occupied cells after the last update
     uint32_t* occupied_count = nullptr;

@@ -1,5 +1,7 @@
 #include "nerf/cuda/render_kernels.h"
 
+#include <algorithm>
+
 #include "core/cuda/device_buffer.h"
 
 namespace npt::nerf::cuda {
@@ -45,38 +47,55 @@ __global__ void __launch_bounds__(k_block) init_kernel(RenderFrame f, RayCamera 
     append(live, i, alive, alive_count);
 }
 
+// Reserves `want` consecutive slots with one atomic per warp; every lane of the warp must call it.
+__device__ __forceinline__ uint32_t reserve(uint32_t want, uint32_t* count) {
+    const int lane = threadIdx.x & 31;
+    uint32_t prefix = want;  // inclusive scan of `want` over the warp
+#pragma unroll
+    for (int off = 1; off < 32; off <<= 1) {
+        const uint32_t o = __shfl_up_sync(0xffffffffu, prefix, off);
+        if (lane >= off) prefix += o;
+    }
+    const uint32_t total = __shfl_sync(0xffffffffu, prefix, 31);
+    uint32_t base = 0;
+    if (lane == 31 && total > 0) base = atomicAdd(count, total);
+    base = __shfl_sync(0xffffffffu, base, 31);
+    return base + prefix - want;
+}
+
 __global__ void __launch_bounds__(k_block) march_kernel(RenderFrame f, const uint32_t* alive, uint32_t n, int k,
                                                          RenderSlots slots) {
     const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
-    if (a >= n) return;
-    const uint32_t pixel = alive[a];
-    RenderRay& r = f.rays[pixel];
-    MarchCursor c = r.cursor;
-    const size_t base = size_t(a) * size_t(k);
+    const bool live = a < n;
+    const uint32_t pixel = live ? alive[a] : 0u;
+    RenderRay* r = live ? &f.rays[pixel] : nullptr;
+    MarchCursor c;
     int j = 0;
-    march_continue(f.march, f.grid, r.ray, c, [&](const MarchSample& s) {
-        slots.pos[base + j] = s.position;
-        slots.dt[base + j] = s.dt;
-        ++j;
-        return j < k;
-    });
-    r.cursor = c;
-    slots.used[a] = uint8_t(j);
-    const Vec3 last = j > 0 ? slots.pos[base + j - 1] : Vec3(0.5f);
-    for (int q = 0; q < k; ++q) {
-        slots.pixel[base + q] = pixel;
-        if (q >= j) {  // unused slot: a harmless point, no weight
-            slots.pos[base + q] = last;
-            slots.dt[base + q] = 0.0f;
-        }
+    if (live) {
+        // Count first (on a copy of the cursor), reserve, then march again to write.
+        c = r->cursor;
+        MarchCursor probe = c;
+        march_continue(f.march, f.grid, r->ray, probe, [&](const MarchSample&) { return ++j < k; });
     }
+    const uint32_t base = reserve(uint32_t(j), slots.count);
+    if (!live) return;
+    int w = 0;
+    march_continue(f.march, f.grid, r->ray, c, [&](const MarchSample& s) {
+        slots.pos[base + w] = s.position;
+        slots.dt[base + w] = s.dt;
+        slots.pixel[base + w] = pixel;
+        return ++w < k;
+    });
+    r->cursor = c;
+    slots.first[a] = base;
+    slots.used[a] = uint8_t(j);
 }
 
 __global__ void __launch_bounds__(k_block) field_fp32_kernel(NerfFieldView field, RenderSlots slots,
-                                                              const Vec3* dirs, uint32_t m, float* sigma, Rgb* rgb) {
-    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
-    if (i >= m) return;
-    field.query(slots.pos[i], dirs[slots.pixel[i]], &sigma[i], &rgb[i]);
+                                                              const Vec3* dirs, float* sigma, Rgb* rgb) {
+    const uint32_t m = *slots.count;
+    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < m; i += gridDim.x * blockDim.x)
+        field.query(slots.pos[i], dirs[slots.pixel[i]], &sigma[i], &rgb[i]);
 }
 
 __global__ void __launch_bounds__(k_block) composite_kernel(RenderFrame f, const uint32_t* alive, uint32_t n,
@@ -92,7 +111,7 @@ __global__ void __launch_bounds__(k_block) composite_kernel(RenderFrame f, const
         float tau = r.tau;
         Rgb color = r.color;
         bool done = false;
-        const size_t base = size_t(a) * size_t(k);
+        const size_t base = slots.first[a];
         const int used = slots.used[a];
         // render_view.cpp's arithmetic, sample by sample.
         for (int j = 0; j < used; ++j) {
@@ -135,10 +154,10 @@ void render_march(const RenderFrame& f, const uint32_t* alive, uint32_t n, int k
     NPT_CUDA_CHECK_LAUNCH("render march_kernel");
 }
 
-void render_field_fp32(const NerfFieldView& field, const RenderSlots& slots, const Vec3* dirs, uint32_t m,
+void render_field_fp32(const NerfFieldView& field, const RenderSlots& slots, const Vec3* dirs, uint32_t capacity,
                        float* sigma, Rgb* rgb, cudaStream_t s) {
-    if (m == 0) return;
-    field_fp32_kernel<<<blocks_for(m), k_block, 0, s>>>(field, slots, dirs, m, sigma, rgb);
+    if (capacity == 0) return;
+    field_fp32_kernel<<<std::min(blocks_for(capacity), 132u * 16u), k_block, 0, s>>>(field, slots, dirs, sigma, rgb);
     NPT_CUDA_CHECK_LAUNCH("render field_fp32_kernel");
 }
 

@@ -33,22 +33,25 @@ struct RenderFrame {
     float min_transmittance = 1e-4f;
 };
 
-struct RenderSlots {              // K slots per live ray in a round
+struct RenderSlots {              // the samples of a round, packed (each live ray reserves what it marched)
     Vec3* pos = nullptr;
     float* dt = nullptr;
     uint32_t* pixel = nullptr;    // the owner's pixel (index into dirs)
-    uint8_t* used = nullptr;      // per live ray: samples of this round (<= K)
+    uint32_t* first = nullptr;    // per live ray: its first sample this round
+    uint8_t* used = nullptr;      // per live ray: samples this round (<= K)
+    uint32_t* count = nullptr;    // device: samples this round (zero before the march)
 };
 
 // Sets up every pixel's ray; pixels whose ray misses the model are written at once; the others go to
 // `alive` (count in *alive_count, which must be zero before).
 void render_init(const RenderFrame& f, const RayCamera& camera, uint32_t* alive, uint32_t* alive_count,
                  cudaStream_t s);
-// Up to k samples for each of the n live rays, into slots [i * k, i * k + k).
+// Up to k samples for each of the n live rays, packed into the slots (at most n * k of them).
 void render_march(const RenderFrame& f, const uint32_t* alive, uint32_t n, int k, RenderSlots slots,
                   cudaStream_t s);
-// The fp32 reference evaluation of the field (NerfFieldView, the CPU's per-point code) on m slots.
-void render_field_fp32(const NerfFieldView& field, const RenderSlots& slots, const Vec3* dirs, uint32_t m,
+// The fp32 reference evaluation of the field (NerfFieldView, the CPU's per-point code) on the round's samples
+// (*slots.count of them; `capacity` bounds the launch).
+void render_field_fp32(const NerfFieldView& field, const RenderSlots& slots, const Vec3* dirs, uint32_t capacity,
                        float* sigma, Rgb* rgb, cudaStream_t s);
 // Composites the round's samples; rays that go on are appended to next (count in *next_count, zero before).
 void render_composite(const RenderFrame& f, const uint32_t* alive, uint32_t n, int k, RenderSlots slots,
