@@ -1,5 +1,7 @@
 #include "cmd_bake.h"
 
+#include "backend_option.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
@@ -83,6 +85,7 @@ CLI::App* add_bake_command(CLI::App& app, BakeArgs& args) {
                     "Drop voxels with sigma below this (per model unit); default: occupancy.threshold / "
                     "(8 * min_step), 0.74 with the default config")
         ->check(CLI::NonNegativeNumber);
+    add_backend_option(cmd, args.backend);
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads (default: 0)")
         ->check(CLI::Range(0, 4096));
     return cmd;
@@ -111,6 +114,7 @@ int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard&
     std::optional<tbb::global_control> threads;
     if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
 
+    const nerf::Backend backend = resolve_backend(args.backend);
     const nerf::NerfModel model = nerf::load_model(args.model);
     const bake::BakeLayout layout = bake::make_bake_layout(model, settings);
     if (format == bake::GridFormat::raw) {
@@ -128,8 +132,9 @@ int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard&
     ps.style = progress_style(stream_is_tty(stderr), global.quiet);
     Progress progress(ps, std::cerr);
     const auto t0 = std::chrono::steady_clock::now();
+    const std::unique_ptr<bake::BakeField> field = nerf::make_bake_field(backend, model);
     const bake::BakedGrid grid = bake::bake_model(
-        model, settings, [&](uint64_t done, uint64_t total) { progress.update(done, total); });
+        model, settings, [&](uint64_t done, uint64_t total) { progress.update(done, total); }, field.get());
     progress.finish();
     const double bake_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (grid.density_voxels == 0)

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/rng.h"
+#include "bake/bake_grid.h"
 #include "nerf/backend/nerf_backend.h"
 #include "nerf/cuda/cuda_field.h"
 #include "nerf/cuda/cuda_renderer.h"
@@ -302,6 +303,39 @@ TEST(NerfCuda, SigkilledGpuTrainingResumesFromItsCheckpoint) {
     const NerfModel resumed = load_model(model);
     EXPECT_EQ(resumed.training->adam.step, target);
     EXPECT_GT(resumed.training->elapsed_seconds, partial.training->elapsed_seconds);
+}
+
+}  // namespace
+}  // namespace npt::nerf
+
+namespace npt::nerf {
+namespace {
+
+// A bake on the GPU evaluates the same fp32 field as the CPU bake: the same voxels, the same values.
+TEST(NerfCuda, GpuBakeEqualsTheCpuBake) {
+    const Dataset train = test::make_sphere_scene({.views = 12, .size = 32, .view_seed = 1});
+    NerfModel model = create_model(gpu_sphere_config(), train.aabb_scale, ngp_world_to_model(train.scale, train.offset));
+    cuda::CudaTrainer trainer(model, train);
+    for (int i = 0; i < 300; ++i) trainer.step();
+    trainer.sync_model();
+    bake::BakeSettings s;
+    s.resolution = 48;
+    const bake::BakedGrid cpu = bake::bake_model(model, s);
+    const auto field = make_bake_field(Backend::cuda, model);
+    const bake::BakedGrid gpu = bake::bake_model(model, s, {}, field.get());
+    std::printf("bake 48^3: CPU %zu voxels (%llu with density), GPU %zu (%llu)\n", cpu.size(),
+                (unsigned long long)cpu.density_voxels, gpu.size(), (unsigned long long)gpu.density_voxels);
+    ASSERT_GT(cpu.density_voxels, 100u);
+    // A voxel at the threshold may fall either way under float rounding: allow a few in a thousand.
+    EXPECT_NEAR(double(gpu.size()), double(cpu.size()), 0.003 * double(cpu.size()) + 2);
+    if (gpu.coords != cpu.coords) return;  // the element-wise comparison needs the same voxels
+    double max_sigma = 0, max_rgb = 0;
+    for (size_t i = 0; i < cpu.size(); ++i) {
+        max_sigma = std::max(max_sigma, std::fabs(double(gpu.sigma[i]) - cpu.sigma[i]) / std::max(1.0f, cpu.sigma[i]));
+        for (int k = 0; k < 3; ++k) max_rgb = std::max(max_rgb, std::fabs(double(gpu.color[i][k]) - cpu.color[i][k]));
+    }
+    EXPECT_LT(max_sigma, 1e-4);
+    EXPECT_LT(max_rgb, 1e-4);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #if NERFPT_HAVE_CUDA
 #include "nerf/cuda/cuda_device.h"
+#include "nerf/cuda/cuda_field.h"
 #include "nerf/cuda/cuda_renderer.h"
 #include "nerf/cuda/cuda_trainer.h"
 #endif
@@ -102,6 +103,37 @@ class GpuViewRenderer final : public ViewRendererBackend {
   private:
     cuda::CudaViewRenderer m_renderer;
 };
+
+class GpuBakeField final : public bake::BakeField {
+  public:
+    explicit GpuBakeField(const NerfModel& model) : m_eval(model, cuda::Precision::fp32) {}
+    void density(const std::vector<Vec3>& positions, std::vector<float>& sigma) override {
+        sigma.resize(positions.size());
+        m_eval.evaluate(positions.data(), nullptr, positions.size(), sigma.data(), nullptr);
+    }
+    void mean_color(const std::vector<Vec3>& positions, const std::vector<Vec3>& dirs,
+                    std::vector<Rgb>& color) override {
+        const size_t n = positions.size(), nd = dirs.size();
+        std::vector<Vec3> pos(n * nd), dir(n * nd);
+        for (size_t t = 0; t < n; ++t)
+            for (size_t d = 0; d < nd; ++d) {
+                pos[t * nd + d] = positions[t];
+                dir[t * nd + d] = dirs[d];
+            }
+        std::vector<float> sigma(n * nd);
+        std::vector<Rgb> rgb(n * nd);
+        m_eval.evaluate(pos.data(), dir.data(), n * nd, sigma.data(), rgb.data());
+        color.resize(n);
+        for (size_t t = 0; t < n; ++t) {
+            Rgb sum(0.0f);  // summed in direction order, as the CPU bake
+            for (size_t d = 0; d < nd; ++d) sum += rgb[t * nd + d];
+            color[t] = sum / float(nd);
+        }
+    }
+
+  private:
+    cuda::CudaFieldEvaluator m_eval;
+};
 #endif
 
 }  // namespace
@@ -142,6 +174,15 @@ std::unique_ptr<ViewRendererBackend> make_view_renderer(Backend backend, const N
     if (backend == Backend::cuda) throw Error("--backend cuda: " + cuda_unavailable_reason());
     (void)precision;
     return std::make_unique<CpuViewRenderer>(model);
+}
+
+std::unique_ptr<bake::BakeField> make_bake_field(Backend backend, const NerfModel& model) {
+#if NERFPT_HAVE_CUDA
+    if (backend == Backend::cuda) return std::make_unique<GpuBakeField>(model);
+#endif
+    if (backend == Backend::cuda) throw Error("--backend cuda: " + cuda_unavailable_reason());
+    (void)model;
+    return nullptr;
 }
 
 }  // namespace npt::nerf

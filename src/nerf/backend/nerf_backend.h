@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "bake/bake_grid.h"
 #include "core/image.h"
 #include "nerf/dataset.h"
 #include "nerf/nerf_model.h"
@@ -59,6 +60,10 @@ class ViewRendererBackend {
     virtual double render_ms(const Camera& camera, const ViewOptions& options) = 0;
     virtual std::string device() const = 0;
 };
+
+// The field evaluator a bake uses on this backend: nullptr for the CPU (bake_model's own parallel path); on the
+// GPU the fp32 per-point code, so that a GPU bake is the CPU's up to rounding. The model must outlive it.
+std::unique_ptr<bake::BakeField> make_bake_field(Backend backend, const NerfModel& model);
 
 // The model must outlive the renderer.
 std::unique_ptr<ViewRendererBackend> make_view_renderer(Backend backend, const NerfModel& model,
