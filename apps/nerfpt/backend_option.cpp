@@ -11,6 +11,10 @@ void add_backend_option(CLI::App* cmd, std::string& backend) {
         ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
 }
 
+void check_requested_backend(const std::string& requested) {
+    if (requested == "cuda") nerf::choose_backend(requested);
+}
+
 nerf::Backend resolve_backend(const std::string& requested) {
     const nerf::BackendChoice c = nerf::choose_backend(requested);
     if (!c.note.empty()) spdlog::info("{}", c.note);

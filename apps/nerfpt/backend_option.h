@@ -11,6 +11,9 @@ namespace npt::cli {
 
 void add_backend_option(CLI::App* cmd, std::string& backend);
 
+// An explicit --backend cuda without a usable GPU fails here, before any input is loaded (no note is logged).
+void check_requested_backend(const std::string& requested);
+
 // Resolves the option and logs the CPU fallback's reason once. Throws npt::Error for --backend cuda without a
 // usable GPU.
 nerf::Backend resolve_backend(const std::string& requested);

@@ -92,6 +92,7 @@ CLI::App* add_bake_command(CLI::App& app, BakeArgs& args) {
 }
 
 int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    check_requested_backend(args.backend);
     // Everything that can be checked without the model first, so a typo fails at once.
     require_file(args.model, "MODEL");
     fs::path out = args.output;
@@ -114,7 +115,6 @@ int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard&
     std::optional<tbb::global_control> threads;
     if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
 
-    const nerf::Backend backend = resolve_backend(args.backend);
     const nerf::NerfModel model = nerf::load_model(args.model);
     const bake::BakeLayout layout = bake::make_bake_layout(model, settings);
     if (format == bake::GridFormat::raw) {
@@ -132,7 +132,8 @@ int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard&
     ps.style = progress_style(stream_is_tty(stderr), global.quiet);
     Progress progress(ps, std::cerr);
     const auto t0 = std::chrono::steady_clock::now();
-    const std::unique_ptr<bake::BakeField> field = nerf::make_bake_field(backend, model);
+    // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
+    const std::unique_ptr<bake::BakeField> field = nerf::make_bake_field(resolve_backend(args.backend), model);
     const bake::BakedGrid grid = bake::bake_model(
         model, settings, [&](uint64_t done, uint64_t total) { progress.update(done, total); }, field.get());
     progress.finish();

@@ -89,6 +89,7 @@ std::vector<std::string> output_names(const nerf::Dataset& data, const std::vect
 }  // namespace
 
 int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    check_requested_backend(args.backend);
     // Every path first: a typo must not cost the time of loading a model and a data set.
     require_file(args.model, "MODEL");
     require_path(args.data, "DATA");
@@ -98,7 +99,6 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
 
     const auto t_start = std::chrono::steady_clock::now();
-    const nerf::Backend backend = resolve_backend(args.backend);
     const nerf::NerfModel model = nerf::load_model(args.model);
     const bool tty = stream_is_tty(stderr);
     nerf::Dataset data = load_dataset_with_progress(args.data, args.split, args.downscale, global.quiet);
@@ -106,7 +106,8 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     std::vector<size_t> views;
     for (size_t i = 0; i < data.cameras.size(); i += size_t(args.every)) views.push_back(i);
     const std::vector<std::string> names = output_names(data, views);
-    const auto renderer = nerf::make_view_renderer(backend, model);
+    // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
+    const auto renderer = nerf::make_view_renderer(resolve_backend(args.backend), model);
     spdlog::info("evaluating {} of {} views at {}x{} on {}", views.size(), data.cameras.size(), data.width,
                  data.height, renderer->device());
 

@@ -118,6 +118,7 @@ class TrainProgress {
 }  // namespace
 
 int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    check_requested_backend(args.backend);
     const fs::path out = args.output;
     check_output(out, args.resume, args.force);
     std::optional<tbb::global_control> threads;

@@ -192,6 +192,7 @@ nerf::Camera data_camera(const ViewArgs& args, const std::string& data_path, siz
 }  // namespace
 
 int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    check_requested_backend(args.backend);
     // Every check that needs no loading first: a typo must fail at once.
     require_file(args.model, "MODEL");
     const fs::path out = args.output;
@@ -221,7 +222,6 @@ int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard&
     std::optional<tbb::global_control> threads;
     if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
 
-    const nerf::Backend backend = resolve_backend(args.backend);
     const nerf::NerfModel model = nerf::load_model(args.model);
     std::vector<nerf::Camera> cameras;
     if (!args.camera.empty()) {
@@ -259,7 +259,8 @@ int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard&
     uint64_t total_rows = 0;
     for (const nerf::Camera& c : cameras) total_rows += uint64_t(c.height);
     // Cooperative: an interrupt stops the render at the next rows, so the temporary folder is cleaned up.
-    const auto renderer = nerf::make_view_renderer(backend, model);
+    // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
+    const auto renderer = nerf::make_view_renderer(resolve_backend(args.backend), model);
     spdlog::info("rendering on {}", renderer->device());
     interrupts.set_cooperative(true);
     const auto t0 = std::chrono::steady_clock::now();

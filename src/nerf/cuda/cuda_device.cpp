@@ -18,7 +18,11 @@ bool probe(std::string* why, cudaDeviceProp* prop_out) {
         return false;
     }
     if (e == cudaErrorInsufficientDriver) {
-        if (why) *why = "the NVIDIA driver is older than this build's CUDA runtime (update the driver)";
+        int driver = 0;
+        cudaDriverGetVersion(&driver);  // 0 when no driver is installed at all
+        if (why)
+            *why = driver == 0 ? "no NVIDIA driver is installed (no CUDA GPU here)"
+                               : "the NVIDIA driver is older than this build's CUDA runtime (update the driver)";
         return false;
     }
     if (e != cudaSuccess) {
