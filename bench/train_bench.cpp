@@ -110,7 +110,8 @@ int main(int argc, char** argv) {
         nerf::Dataset test = nerf::load_dataset(data, "test");
         nerf::downscale_dataset(train, downscale);
         nerf::downscale_dataset(test, downscale);
-        const nerf::NerfConfig config = config_path.empty() ? nerf::NerfConfig{} : nerf::load_config(config_path);
+        const nerf::NerfConfig base = gpu ? nerf::cuda_default_config() : nerf::NerfConfig{};
+        const nerf::NerfConfig config = config_path.empty() ? base : nerf::load_config(config_path, base);
         nerf::NerfModel model =
             nerf::create_model(config, train.aabb_scale, nerf::ngp_world_to_model(train.scale, train.offset));
         const auto trainer = nerf::make_trainer(backend, model, train);

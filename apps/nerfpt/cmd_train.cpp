@@ -29,10 +29,10 @@ constexpr uint64_t k_default_steps = 3000;
 CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
     CLI::App* cmd = app.add_subcommand("train", "Train a NeRF from posed images (transforms.json) on a GPU or the CPU");
     cmd->footer(
-        "The model follows instant-ngp's NeRF: a 16-level hash grid (2^19 entries per level, 2 features,\n"
-        "base resolution 16, finest 2048 x aabb_scale), a 1x64 density MLP with 16 outputs, SH degree 4 of\n"
-        "the view direction, a 2x64 colour MLP; occupancy grid 128^3 per cascade; Adam lr 1e-2; all\n"
-        "changeable with --config (docs/formats.md lists every field).\n"
+        "The model follows instant-ngp's NeRF: a hash grid of 16 levels x 2 features on the CPU, 8 x 4 on\n"
+        "a GPU (2^19 entries per level, base resolution 16, finest 2048 x aabb_scale), a 1x64 density MLP\n"
+        "with 16 outputs, SH degree 4 of the view direction, a 2x64 colour MLP; occupancy grid 128^3 per\n"
+        "cascade; Adam lr 1e-2; all changeable with --config (docs/formats.md lists every field).\n"
         "--steps and --time count the whole training, across resumes. Without either, 3000 steps.\n"
         "A checkpoint is written every training.checkpoint_interval steps (on a GPU: at most every 60 s\n"
         "unless --checkpoint-every is given) and on Ctrl-C (a second Ctrl-C quits at once); --resume\n"
@@ -135,8 +135,12 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     }
     const bool tty = stream_is_tty(stderr);
     nerf::Dataset data = load_dataset_with_progress(args.data, args.split, args.downscale, global.quiet);
+    // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
+    const nerf::Backend backend = resolve_backend(args.backend);
     if (!args.resume) {
-        const nerf::NerfConfig config = args.config.empty() ? nerf::NerfConfig{} : nerf::load_config(args.config);
+        const nerf::NerfConfig base =
+            backend == nerf::Backend::cuda ? nerf::cuda_default_config() : nerf::NerfConfig{};
+        const nerf::NerfConfig config = args.config.empty() ? base : nerf::load_config(args.config, base);
         model = nerf::create_model(config, data.aabb_scale, nerf::ngp_world_to_model(data.scale, data.offset));
     }
     if (args.checkpoint_every > 0) model.config.training.checkpoint_interval = args.checkpoint_every;
@@ -145,7 +149,6 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
                  data.width, data.height, data.aabb_scale, model.params.size(),
                  args.resume ? fmt::format(", resuming at step {}", model.training->adam.step) : "");
 
-    const nerf::Backend backend = resolve_backend(args.backend);
     std::unique_ptr<nerf::TrainerBackend> trainer_ptr = nerf::make_trainer(backend, model, data);
     nerf::TrainerBackend& trainer = *trainer_ptr;
     spdlog::info("training on {}", trainer.device());

@@ -147,7 +147,14 @@ const char* const k_groups[] = {"encoding", "density_mlp", "color_mlp", "occupan
 
 }  // namespace
 
-NerfConfig config_from_json(const json& j, const std::string& source) {
+NerfConfig cuda_default_config() {
+    NerfConfig c;
+    c.encoding.grid.levels = 8;
+    c.encoding.grid.features_per_level = 4;
+    return c;
+}
+
+NerfConfig config_from_json(const json& j, const std::string& source, const NerfConfig& base) {
     if (!j.is_object())
         throw Error(source + ": expected a JSON object at the top level, got " + j.type_name());
     for (auto it = j.begin(); it != j.end(); ++it) {
@@ -155,7 +162,7 @@ NerfConfig config_from_json(const json& j, const std::string& source) {
         for (const char* g : k_groups) known = known || it.key() == g;
         if (!known) throw Error(source + ": unknown field '" + it.key() + "'");
     }
-    NerfConfig c;
+    NerfConfig c = base;
     {
         GroupReader r(j, "encoding", source);
         HashGridConfig& g = c.encoding.grid;
@@ -292,7 +299,7 @@ json config_to_json(const NerfConfig& c) {
     return j;
 }
 
-NerfConfig load_config(const std::string& path) {
+NerfConfig load_config(const std::string& path, const NerfConfig& base) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": file not found");
     std::ifstream f(path, std::ios::binary);
@@ -305,7 +312,7 @@ NerfConfig load_config(const std::string& path) {
     } catch (const json::exception& e) {  // syntax errors, and number overflow such as 1e999
         throw Error(path + ": malformed JSON (" + e.what() + ")");
     }
-    return config_from_json(j, path);
+    return config_from_json(j, path, base);
 }
 
 }  // namespace npt::nerf

@@ -74,19 +74,27 @@ NPT_HD NPT_INLINE int march_cascade(const OccupancyGridView& grid, Vec3 p, float
     return from_dt > from_pos ? from_dt : from_pos;
 }
 
-// Distance along the ray from p to the exit of p's cell in cascade c (instant-ngp's distance_to_next_voxel).
-// Axes the ray is parallel to never exit; a point exactly on a boundary that the ray leaves through gives 0.
-NPT_HD NPT_INLINE float march_distance_to_cell_exit(const OccupancyGridView& grid, Vec3 p, Vec3 d, int c) {
-    const float cell = grid.cascade_size(c) / float(grid.resolution);
+// Distance along the ray from p to the exit of p's cell on a lattice of cells of side `cell` (a power of two
+// times 1/resolution) aligned at 0.5 (instant-ngp's distance_to_next_voxel). inv_d holds 1/d per axis; axes
+// the ray is parallel to (d == 0) never exit; a point exactly on a boundary that the ray leaves through gives 0.
+NPT_HD NPT_INLINE float march_distance_to_cell_exit(Vec3 p, Vec3 d, Vec3 inv_d, float cell) {
+    const float inv_cell = 1.0f / cell;  // exact for power-of-two resolutions (the default 128)
     float t = INFINITY;
     for (int a = 0; a < 3; ++a) {
         if (d[a] == 0.0f) continue;
-        // Cell boundaries are the integers of u: the cascade is centred at 0.5 and R is even.
-        const float u = (p[a] - 0.5f) / cell;
+        // Cell boundaries are the integers of u: the cascade is centred at 0.5 and its cell count is even.
+        const float u = (p[a] - 0.5f) * inv_cell;
         const float boundary = d[a] > 0.0f ? floorf(u) + 1.0f : floorf(u);
-        t = fminf(t, (boundary - u) * cell / d[a]);
+        t = fminf(t, (boundary - u) * cell * inv_d[a]);
     }
     return fmaxf(t, 0.0f);
+}
+
+// The same for p's cell in cascade c.
+NPT_HD NPT_INLINE float march_distance_to_cell_exit(const OccupancyGridView& grid, Vec3 p, Vec3 d, int c) {
+    const Vec3 inv_d(d.x != 0.0f ? 1.0f / d.x : 0.0f, d.y != 0.0f ? 1.0f / d.y : 0.0f,
+                     d.z != 0.0f ? 1.0f / d.z : 0.0f);
+    return march_distance_to_cell_exit(p, d, inv_d, grid.cascade_size(c) / float(grid.resolution));
 }
 
 // The first point of the step lattice (t, t + dt(t), ...) at or past t_target, at least one step on so that a
@@ -147,6 +155,8 @@ NPT_HD inline bool march_start(const MarchParams& mp, const OccupancyGridView& g
 template <typename Visit>
 NPT_HD inline void march_continue(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
                                   MarchCursor& c, Visit&& visit) {
+    const Vec3 inv_d(ray.d.x != 0.0f ? 1.0f / ray.d.x : 0.0f, ray.d.y != 0.0f ? 1.0f / ray.d.y : 0.0f,
+                     ray.d.z != 0.0f ? 1.0f / ray.d.z : 0.0f);
     while (!c.stopped && c.t < c.t_far && c.count < mp.max_samples) {
         const float t = c.t;
         const Vec3 p = ray.at(t);
@@ -171,7 +181,10 @@ NPT_HD inline void march_continue(const MarchParams& mp, const OccupancyGridView
             // boundary itself, so that rounding of o + t d cannot leave the next position in this cell.
             const float cell = grid.cascade_size(cas) / float(grid.resolution);
             const float eps = fmaxf(1e-6f * cell, 1e-6f * t);
-            const float next = march_advance(mp, t, t + march_distance_to_cell_exit(grid, p, ray.d, cas) + eps);
+            // Inside an empty coarse cell the whole coarse cell is crossed at once: no sample can lie in it.
+            const float skip_cell =
+                grid.coarse_occupied(p, cas) ? cell : cell * float(OccupancyGridView::k_coarse);
+            const float next = march_advance(mp, t, t + march_distance_to_cell_exit(p, ray.d, inv_d, skip_cell) + eps);
             if (!(next > t)) {
                 c.stopped = true;
                 return;

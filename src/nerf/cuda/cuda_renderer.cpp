@@ -11,6 +11,7 @@
 #include "nerf/cuda/cuda_device.h"
 #include "nerf/cuda/fused_mlp.h"
 #include "nerf/cuda/hash_grid_kernels.h"
+#include "nerf/cuda/occupancy_kernels.h"
 #include "nerf/cuda/render_kernels.h"
 
 namespace npt::nerf::cuda {
@@ -33,7 +34,7 @@ struct CudaViewRenderer::Impl {
     cudaStream_t stream = nullptr;
     DeviceBuffer<float> params;
     DeviceBuffer<__half> mlp_half;
-    DeviceBuffer<uint32_t> occupied;  // bit field
+    DeviceBuffer<uint32_t> occupied, coarse;  // bit fields (OccupancyGridView)
     // Per frame (resized with the image).
     int width = 0, height = 0;
     DeviceBuffer<RenderRay> rays;
@@ -46,6 +47,7 @@ struct CudaViewRenderer::Impl {
     DeviceBuffer<uint32_t> slot_pixel;
     DeviceBuffer<uint8_t> slot_used;
     DeviceBuffer<uint32_t> slot_first;
+    DeviceBuffer<float4> slot_scratch;
     DeviceBuffer<Rgb> slot_rgb;
     DeviceBuffer<__half> slot_enc;
     uint32_t* host_count = nullptr;
@@ -77,6 +79,7 @@ void CudaViewRenderer::Impl::resize(int w, int h) {
         slot_pixel.allocate(slots, "the sample slots", "--res");
         slot_used.allocate(slots, "the sample slots", "--res");
         slot_first.allocate(slots, "the sample slots", "--res");
+        slot_scratch.allocate(slots, "the sample slots", "--res");
         slot_rgb.allocate(slots, "the sample slots", "--res");
         if (precision == Precision::fp16) slot_enc.allocate(slots * k_mlp_inputs, "the sample slots", "--res");
     }
@@ -102,10 +105,11 @@ void CudaViewRenderer::Impl::run(const Camera& camera, const ViewOptions& option
     f.height = height;
     f.background = options.background;
     f.march = march;
-    f.grid = {nullptr, model.occupancy.cascades(), model.occupancy.resolution(), occupied.data()};
+    f.grid = {nullptr, model.occupancy.cascades(), model.occupancy.resolution(), occupied.data(),
+              coarse.size() ? coarse.data() : nullptr};
     f.min_transmittance = model.config.march.min_transmittance;
     RenderSlots slots{slot_pos.data(), slot_dt.data(), slot_pixel.data(), slot_first.data(), slot_used.data(),
-                      counts.data() + 2};
+                      counts.data() + 2, slot_scratch.data()};
 
     cuda_check(cudaMemsetAsync(counts.data(), 0, 3 * sizeof(uint32_t), stream), "cudaMemsetAsync");
     render_init(f, make_ray_camera(camera, model.world_to_model), alive[0].data(), counts.data(), stream);
@@ -171,6 +175,21 @@ CudaViewRenderer::CudaViewRenderer(const NerfModel& model, Precision precision)
     for (size_t i = 0; i < model.occupancy.cell_count(); ++i)
         if (g.occupied[i]) bits[i >> 5] |= 1u << (i & 31);
     I.occupied.upload(bits, "the occupancy grid", "occupancy.resolution");
+    const int res = model.occupancy.resolution();
+    if (coarse_cells_fit(res)) {
+        // Coarse cells for skipping empty space (OccupancyGridView::coarse_bits).
+        const int k = OccupancyGridView::k_coarse, rc = res / k;
+        std::vector<uint32_t> coarse(coarse_words(model.occupancy.cascades(), res), 0u);
+        const size_t cells = size_t(res) * res * res;
+        for (size_t i = 0; i < model.occupancy.cell_count(); ++i) {
+            if (!g.occupied[i]) continue;
+            const size_t c = i / cells, local = i % cells;
+            const size_t x = (local % res) / k, y = ((local / res) % res) / k, z = (local / (size_t(res) * res)) / k;
+            const size_t ci = c * size_t(rc) * rc * rc + x + y * rc + z * size_t(rc) * rc;
+            coarse[ci >> 5] |= 1u << (ci & 31);
+        }
+        I.coarse.upload(coarse, "the occupancy grid", "occupancy.resolution");
+    }
     I.counts.allocate(3);  // live rays (two lists), samples of the round
     cuda_check(cudaMallocHost(&I.host_count, sizeof(uint32_t)), "cudaMallocHost");
     cuda_check(cudaStreamSynchronize(I.stream), "uploading the model");

@@ -61,6 +61,7 @@ struct CudaTrainer::Impl {
     DeviceBuffer<uint32_t> ray_first, ray_count;
     DeviceBuffer<Rgb> ray_target, ray_background;
     DeviceBuffer<Vec3> ray_dir;
+    DeviceBuffer<float4> march_scratch;
     // Per marched sample.
     DeviceBuffer<Vec3> s_pos;
     DeviceBuffer<float> s_dt, s_sigma;
@@ -156,6 +157,7 @@ void CudaTrainer::Impl::setup() {
     ray_target.allocate(max_rays, "the ray buffers", k_lower_batch);
     ray_background.allocate(max_rays, "the ray buffers", k_lower_batch);
     ray_dir.allocate(max_rays, "the ray buffers", k_lower_batch);
+    march_scratch.allocate(size_t(max_rays) * k_march_scratch, "the ray buffers", k_lower_batch);
     s_pos.allocate(capacity, "the sample buffers", k_lower_batch);
     s_dt.allocate(capacity, "the sample buffers", k_lower_batch);
     s_sigma.allocate(capacity, "the sample buffers", k_lower_batch);
@@ -194,6 +196,7 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     ma.n_rays = n_rays;
     ma.rays = rays;
     ma.samples = samples;
+    ma.scratch = march_scratch.data();
     ma.counters = ctr;
     march_training_rays(ma, stream);
     mark(m_marched);

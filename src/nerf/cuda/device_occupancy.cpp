@@ -26,6 +26,10 @@ DeviceOccupancy::DeviceOccupancy(const OccupancyGrid& host, float threshold, cud
     m_dev.estimate = m_estimate.data();
     m_dev.occupied = m_occupied.data();
     m_dev.occupied_bits = m_bits.data();
+    if (coarse_cells_fit(host.resolution())) {
+        m_coarse.allocate(coarse_words(host.cascades(), host.resolution()), "the occupancy grid");
+        m_dev.coarse_bits = m_coarse.data();
+    }
     m_dev.occupied_list = m_list.data();
     m_dev.occupied_count = m_count.data();
     m_dev.density_sum = m_sum.data();

@@ -22,7 +22,9 @@ class DeviceOccupancy {
     DeviceOccupancy(const OccupancyGrid& host, float threshold, cudaStream_t s);
 
     // The bit-field form (see OccupancyGridView::occupied_bits).
-    OccupancyGridView view() const { return {nullptr, m_dev.cascades, m_dev.resolution, m_bits.data()}; }
+    OccupancyGridView view() const {
+        return {nullptr, m_dev.cascades, m_dev.resolution, m_bits.data(), m_coarse.size() ? m_coarse.data() : nullptr};
+    }
     uint32_t cells() const { return m_dev.cells; }
 
     // One update with the current network: `grid_params` (fp32 hash table) and `mlp_half` (fp16 weights).
@@ -36,7 +38,7 @@ class DeviceOccupancy {
     OccupancyDevice m_dev;
     gpu::DeviceBuffer<float> m_density, m_estimate;
     gpu::DeviceBuffer<uint8_t> m_occupied;
-    gpu::DeviceBuffer<uint32_t> m_bits;
+    gpu::DeviceBuffer<uint32_t> m_bits, m_coarse;
     gpu::DeviceBuffer<uint32_t> m_list, m_count;
     gpu::DeviceBuffer<double> m_sum;
     // Points of one chunk of an update.

@@ -87,6 +87,13 @@ __global__ void threshold_kernel(OccupancyDevice g, float threshold) {
     const unsigned mask = __ballot_sync(0xffffffffu, occ);
     // A warp covers 32 consecutive cells starting at a multiple of 32: one word of the bit field.
     if ((threadIdx.x & 31) == 0 && i < g.cells) g.occupied_bits[i >> 5] = mask;
+    if (occ && g.coarse_bits) {
+        const uint32_t r = uint32_t(g.resolution), cells = r * r * r, k = OccupancyGridView::k_coarse;
+        const uint32_t c = i / cells, local = i % cells, rc = r / k;
+        const uint32_t x = (local % r) / k, y = ((local / r) % r) / k, z = (local / (r * r)) / k;
+        const uint32_t ci = c * rc * rc * rc + x + y * rc + z * rc * rc;
+        atomicOr(g.coarse_bits + (ci >> 5), 1u << (ci & 31));
+    }
     if (!occ) return;  // the shuffle below is among the lanes in mask only
     const int lane = threadIdx.x & 31;
     const int leader = __ffs(mask) - 1;
@@ -99,6 +106,13 @@ __global__ void threshold_kernel(OccupancyDevice g, float threshold) {
 unsigned blocks_for(uint32_t n) { return (n + k_block - 1) / k_block; }
 
 }  // namespace
+
+size_t coarse_words(int cascades, int resolution) {
+    const size_t rc = size_t(resolution / OccupancyGridView::k_coarse);
+    return (size_t(cascades) * rc * rc * rc + 31) / 32;
+}
+
+bool coarse_cells_fit(int resolution) { return resolution % (2 * OccupancyGridView::k_coarse) == 0; }
 
 void occupancy_plan(const OccupancyDevice& g, uint64_t seed, bool warmup, uint32_t first, uint32_t n,
                     uint32_t* cells, Vec3* positions, cudaStream_t s) {
@@ -117,6 +131,9 @@ void occupancy_splat(const OccupancyDevice& g, const uint32_t* cells, const floa
 void occupancy_apply(const OccupancyDevice& g, float decay, float threshold, cudaStream_t s) {
     gpu::cuda_check(cudaMemsetAsync(g.density_sum, 0, sizeof(double), s), "cudaMemsetAsync");
     gpu::cuda_check(cudaMemsetAsync(g.occupied_count, 0, sizeof(uint32_t), s), "cudaMemsetAsync");
+    if (g.coarse_bits)
+        gpu::cuda_check(cudaMemsetAsync(g.coarse_bits, 0, coarse_words(g.cascades, g.resolution) * 4, s),
+                        "cudaMemsetAsync");
     decay_kernel<<<blocks_for(g.cells), k_block, 0, s>>>(g, decay);
     NPT_CUDA_CHECK_LAUNCH("occupancy decay_kernel");
     threshold_kernel<<<blocks_for(g.cells), k_block, 0, s>>>(g, threshold);

@@ -7,6 +7,7 @@
 
 #include <cuda_runtime.h>
 
+#include <cstddef>
 #include <cstdint>
 
 #include "core/vec.h"
@@ -17,6 +18,8 @@ struct OccupancyDevice {
     float* density = nullptr;         // cascades * R^3
     uint8_t* occupied = nullptr;
     uint32_t* occupied_bits = nullptr;  // the same flags, one bit per cell (what the marches read)
+    uint32_t* coarse_bits = nullptr;    // OccupancyGridView::coarse_bits, or null when the resolution has no
+                                        // whole coarse cells
     float* estimate = nullptr;        // scratch: the largest new estimate per cell, 0 = none
     uint32_t* occupied_list = nullptr;  // indices of occupied cells after the last update
     uint32_t* occupied_count = nullptr;
@@ -25,6 +28,10 @@ struct OccupancyDevice {
     int resolution = 128;
     uint32_t cells = 0;
 };
+
+// Words of the coarse bit field, and whether a resolution has whole coarse cells (OccupancyGridView).
+size_t coarse_words(int cascades, int resolution);
+bool coarse_cells_fit(int resolution);
 
 // Points for samples [first, first + n) of an update: cell i (warm-up: the cells in order; otherwise uniform
 // for the first cells/4 samples, then random occupied cells).

@@ -69,24 +69,26 @@ __global__ void __launch_bounds__(k_block) march_kernel(RenderFrame f, const uin
     const bool live = a < n;
     const uint32_t pixel = live ? alive[a] : 0u;
     RenderRay* r = live ? &f.rays[pixel] : nullptr;
-    MarchCursor c;
     int j = 0;
     if (live) {
-        // Count first (on a copy of the cursor), reserve, then march again to write.
-        c = r->cursor;
-        MarchCursor probe = c;
-        march_continue(f.march, f.grid, r->ray, probe, [&](const MarchSample&) { return ++j < k; });
+        float4* mine = slots.scratch + size_t(a) * size_t(k);
+        const Ray ray = r->ray;
+        MarchCursor c = r->cursor;  // in registers while marching
+        march_continue(f.march, f.grid, ray, c, [&](const MarchSample& s) {
+            mine[j++] = make_float4(s.position.x, s.position.y, s.position.z, s.dt);
+            return j < k;
+        });
+        r->cursor = c;
     }
     const uint32_t base = reserve(uint32_t(j), slots.count);
     if (!live) return;
-    int w = 0;
-    march_continue(f.march, f.grid, r->ray, c, [&](const MarchSample& s) {
-        slots.pos[base + w] = s.position;
-        slots.dt[base + w] = s.dt;
-        slots.pixel[base + w] = pixel;
-        return ++w < k;
-    });
-    r->cursor = c;
+    const float4* mine = slots.scratch + size_t(a) * size_t(k);
+    for (int q = 0; q < j; ++q) {
+        const float4 v = mine[q];
+        slots.pos[base + q] = Vec3(v.x, v.y, v.z);
+        slots.dt[base + q] = v.w;
+        slots.pixel[base + q] = pixel;
+    }
     slots.first[a] = base;
     slots.used[a] = uint8_t(j);
 }

@@ -40,6 +40,7 @@ struct RenderSlots {              // the samples of a round, packed (each live r
     uint32_t* first = nullptr;    // per live ray: its first sample this round
     uint8_t* used = nullptr;      // per live ray: samples this round (<= K)
     uint32_t* count = nullptr;    // device: samples this round (zero before the march)
+    float4* scratch = nullptr;    // K per live ray: the march's own slots before packing
 };
 
 // Sets up every pixel's ray; pixels whose ray misses the model are written at once; the others go to

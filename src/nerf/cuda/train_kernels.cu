@@ -34,20 +34,44 @@ __global__ void __launch_bounds__(k_block) march_training_rays_kernel(MarchRaysA
     const Ray ray = pixel_ray(im.cameras[img], px, py);
     const float jitter = rng.next_float();
 
-    // Count first, reserve, then march again to write: two cheap passes beat a per-ray scratch buffer.
-    const int n = march_ray_visit(a.march, a.grid, ray, jitter, [](const MarchSample&) { return true; });
+    // One march into the ray's scratch slots; a ray with more samples counts the rest, reserves, and marches
+    // that part again (marching twice is cheap; a scratch per ray for up to 1024 samples is not).
+    float4* mine = a.scratch + size_t(r) * k_march_scratch;
+    MarchCursor c;
+    int in_scratch = 0, n = 0;
+    if (march_start(a.march, a.grid, ray, jitter, &c)) {
+        march_continue(a.march, a.grid, ray, c, [&](const MarchSample& s) {
+            mine[in_scratch++] = make_float4(s.position.x, s.position.y, s.position.z, s.dt);
+            return in_scratch < k_march_scratch;
+        });
+        n = in_scratch;
+        if (!c.done(a.march)) {
+            MarchCursor rest = c;
+            march_continue(a.march, a.grid, ray, rest, [&](const MarchSample&) {
+                ++n;
+                return true;
+            });
+        }
+    }
     const uint32_t base = atomicAdd(&a.counters->marched, uint32_t(n));
     const bool kept = uint64_t(base) + uint64_t(n) <= a.samples.capacity;
     if (kept) {
         atomicAdd(&a.counters->rays_kept, 1u);
-        uint32_t j = base;
-        march_ray_visit(a.march, a.grid, ray, jitter, [&](const MarchSample& s) {
-            a.samples.pos[j] = s.position;
-            a.samples.dt[j] = s.dt;
-            a.samples.ray[j] = r;
-            ++j;
-            return true;
-        });
+        for (int j = 0; j < in_scratch; ++j) {
+            const float4 v = mine[j];
+            a.samples.pos[base + j] = Vec3(v.x, v.y, v.z);
+            a.samples.dt[base + j] = v.w;
+            a.samples.ray[base + j] = r;
+        }
+        uint32_t j = base + uint32_t(in_scratch);
+        if (n > in_scratch)
+            march_continue(a.march, a.grid, ray, c, [&](const MarchSample& s) {
+                a.samples.pos[j] = s.position;
+                a.samples.dt[j] = s.dt;
+                a.samples.ray[j] = r;
+                ++j;
+                return true;
+            });
     }
     a.rays.first[r] = base;
     a.rays.count[r] = kept ? uint32_t(n) : k_ray_dropped;

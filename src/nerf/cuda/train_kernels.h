@@ -59,6 +59,10 @@ struct CompactBuffers {
     uint32_t capacity = 0;
 };
 
+// Samples a ray keeps in its own scratch slots while it is marched once; longer rays count the rest and
+// march that part again after reserving.
+constexpr int k_march_scratch = 32;
+
 struct MarchRaysArgs {
     DeviceImages images;
     MarchParams march;
@@ -68,6 +72,7 @@ struct MarchRaysArgs {
     uint32_t n_rays = 0;
     RayBuffers rays;
     SampleBuffers samples;
+    float4* scratch = nullptr;  // k_march_scratch per ray: position and dt
     StepCounters* counters = nullptr;
 };
 void march_training_rays(const MarchRaysArgs& a, cudaStream_t s);
