@@ -46,17 +46,19 @@ struct OccupancyGridView {
     NPT_HD NPT_INLINE int64_t cell_index_at(Vec3 p, int c, int res) const {
         const float size = cascade_size(c);
         const float lo = 0.5f - 0.5f * size;
-        int64_t idx[3];
+        int idx[3];
         // Cells per unit, one multiplication: equal to (p - lo) / size * res for power-of-two sizes and
         // resolutions (every factor exact), the cheap form of the same cell on CPU and GPU alike.
         const float cells_per_unit = float(res) / size;
         for (int a = 0; a < 3; ++a) {
             const float u = (p[a] - lo) * cells_per_unit;
             if (!(u >= 0.0f) || u >= float(res)) return -1;
-            idx[a] = int64_t(u);
+            idx[a] = int(u);
         }
-        const int64_t r = res;
-        return int64_t(c) * r * r * r + idx[0] + idx[1] * r + idx[2] * r * r;
+        // 32-bit arithmetic (a grid has at most 2^28 cells, OccupancyGrid's limit): 64-bit products and
+        // conversions cost several instructions each on a GPU.
+        const uint32_t r = uint32_t(res);
+        return int64_t(uint32_t(c) * r * r * r + uint32_t(idx[0]) + uint32_t(idx[1]) * r + uint32_t(idx[2]) * r * r);
     }
     NPT_HD NPT_INLINE int64_t cell_index(Vec3 p, int c) const { return cell_index_at(p, c, resolution); }
     NPT_HD NPT_INLINE bool is_occupied(Vec3 p, int c) const {

@@ -116,6 +116,11 @@ NPT_HD NPT_INLINE float march_advance(const MarchParams& mp, float t, float t_ta
 // and gives the same samples as marching it in one go.
 struct MarchCursor {
     float t = 0, t_far = 0;
+    // With cone_angle 0 the steps are all equal and t is the lattice point t0 + k dt, computed directly rather
+    // than by repeated addition, so that any thread can compute any lattice point exactly (the GPU trainer
+    // splits a ray's lattice over several threads).
+    float t0 = 0;
+    uint32_t k = 0;
     int count = 0;      // samples emitted so far
     int skips = 0;      // empty cells skipped so far
     int max_skips = 0;  // see march_start
@@ -146,7 +151,15 @@ NPT_HD inline bool march_start(const MarchParams& mp, const OccupancyGridView& g
     c->count = 0;
     c->stopped = false;
     c->t = t_near + jitter * march_step(mp, t_near);
+    c->t0 = c->t;
+    c->k = 0;
     return true;
+}
+
+// The lattice index of the first lattice point (t0 + k dt) at or past `target`, at least k + 1.
+NPT_HD NPT_INLINE float march_lattice_next(float t0, float inv_dt, uint32_t k, float target) {
+    const float kn = ceilf((target - t0) * inv_dt);
+    return kn > float(k) + 1.0f ? kn : float(k) + 1.0f;
 }
 
 // Continues the march: calls visit(MarchSample) for each sample in order until visit returns false (the
@@ -157,6 +170,8 @@ NPT_HD inline void march_continue(const MarchParams& mp, const OccupancyGridView
                                   MarchCursor& c, Visit&& visit) {
     const Vec3 inv_d(ray.d.x != 0.0f ? 1.0f / ray.d.x : 0.0f, ray.d.y != 0.0f ? 1.0f / ray.d.y : 0.0f,
                      ray.d.z != 0.0f ? 1.0f / ray.d.z : 0.0f);
+    const bool lattice = mp.cone_angle == 0.0f;
+    const float inv_dt = lattice ? 1.0f / march_step(mp, c.t0) : 0.0f;
     while (!c.stopped && c.t < c.t_far && c.count < mp.max_samples) {
         const float t = c.t;
         const Vec3 p = ray.at(t);
@@ -165,7 +180,8 @@ NPT_HD inline void march_continue(const MarchParams& mp, const OccupancyGridView
         if (!grid.has_occupancy() || grid.is_occupied(p, cas)) {
             ++c.count;
             const bool more = visit(MarchSample{p, t, dt});
-            const float next = t + dt;
+            float next = t + dt;
+            if (lattice) next = c.t0 + float(++c.k) * dt;
             if (!(next > t)) {
                 c.stopped = true;
                 return;
@@ -184,7 +200,19 @@ NPT_HD inline void march_continue(const MarchParams& mp, const OccupancyGridView
             // Inside an empty coarse cell the whole coarse cell is crossed at once: no sample can lie in it.
             const float skip_cell =
                 grid.coarse_occupied(p, cas) ? cell : cell * float(OccupancyGridView::k_coarse);
-            const float next = march_advance(mp, t, t + march_distance_to_cell_exit(p, ray.d, inv_d, skip_cell) + eps);
+            const float target = t + march_distance_to_cell_exit(p, ray.d, inv_d, skip_cell) + eps;
+            float next;
+            if (lattice) {
+                const float kn = march_lattice_next(c.t0, inv_dt, c.k, target);
+                if (!(kn < 4.0e9f)) {  // beyond any lattice a ray can have
+                    c.stopped = true;
+                    return;
+                }
+                c.k = uint32_t(kn);
+                next = c.t0 + float(c.k) * dt;
+            } else {
+                next = march_advance(mp, t, target);
+            }
             if (!(next > t)) {
                 c.stopped = true;
                 return;

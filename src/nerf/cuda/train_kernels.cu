@@ -11,10 +11,13 @@ namespace {
 
 constexpr int k_block = 128;
 
-__global__ void __launch_bounds__(k_block) march_training_rays_kernel(MarchRaysArgs a) {
-    const uint32_t r = blockIdx.x * blockDim.x + threadIdx.x;
-    if (r >= a.n_rays) return;
-    // The CPU trainer's draws, in its order: image, pixel position, background, jitter.
+// Ray r of the step: the CPU trainer's draws, in its order: image, pixel position, background, jitter.
+struct TrainRay {
+    Ray ray;
+    Rgb target, background;
+    float jitter;
+};
+__device__ __forceinline__ TrainRay setup_ray(const MarchRaysArgs& a, uint32_t r) {
     Pcg32 rng(a.step_seed, r);
     const DeviceImages& im = a.images;
     const uint32_t img = rng.next_u32() % im.count;
@@ -22,17 +25,37 @@ __global__ void __launch_bounds__(k_block) march_training_rays_kernel(MarchRaysA
     const float py = rng.next_float() * float(im.height);
     const int ix = min(int(px), im.width - 1), iy = min(int(py), im.height - 1);
     const uint32_t pix = im.rgba[size_t(img) * im.width * im.height + size_t(iy) * im.width + ix];
-    Rgb bg(1.0f);
+    TrainRay t;
+    t.background = Rgb(1.0f);
     if (a.random_background) {
-        const float b0 = rng.next_float();
-        const float b1 = rng.next_float();
-        bg = Rgb(b0, b1, rng.next_float());
+        t.background.x = rng.next_float();
+        t.background.y = rng.next_float();
+        t.background.z = rng.next_float();
     }
     const float alpha = float(pix >> 24) / 255.0f;
     const Rgb rgb(float(pix & 0xff) / 255.0f, float((pix >> 8) & 0xff) / 255.0f,
                   float((pix >> 16) & 0xff) / 255.0f);
-    const Ray ray = pixel_ray(im.cameras[img], px, py);
-    const float jitter = rng.next_float();
+    t.target = rgb * alpha + t.background * (1.0f - alpha);
+    t.ray = pixel_ray(im.cameras[img], px, py);
+    t.jitter = rng.next_float();
+    return t;
+}
+
+__device__ __forceinline__ void write_ray(const MarchRaysArgs& a, uint32_t r, const TrainRay& t, uint32_t base,
+                                          uint32_t n, bool kept) {
+    a.rays.first[r] = base;
+    a.rays.count[r] = kept ? n : k_ray_dropped;
+    a.rays.target[r] = t.target;
+    a.rays.background[r] = t.background;
+    a.rays.dir[r] = t.ray.d;
+}
+
+__global__ void __launch_bounds__(k_block) march_training_rays_kernel(MarchRaysArgs a) {
+    const uint32_t r = blockIdx.x * blockDim.x + threadIdx.x;
+    if (r >= a.n_rays) return;
+    const TrainRay tr = setup_ray(a, r);
+    const Ray& ray = tr.ray;
+    const float jitter = tr.jitter;
 
     // One march into the ray's scratch slots; a ray with more samples counts the rest, reserves, and marches
     // that part again (marching twice is cheap; a scratch per ray for up to 1024 samples is not).
@@ -73,11 +96,94 @@ __global__ void __launch_bounds__(k_block) march_training_rays_kernel(MarchRaysA
                 return true;
             });
     }
-    a.rays.first[r] = base;
-    a.rays.count[r] = kept ? uint32_t(n) : k_ray_dropped;
-    a.rays.target[r] = rgb * alpha + bg * (1.0f - alpha);
-    a.rays.background[r] = bg;
-    a.rays.dir[r] = ray.d;
+    write_ray(a, r, tr, base, uint32_t(n), kept);
+}
+
+// With a uniform step lattice (cone_angle 0: every scene inside the unit cube) the samples of a ray are the
+// lattice points t0 + k dt in occupied cells, so k_segments threads can march one ray together, each a
+// quarter of its lattice: 4x the threads of a step's ~30k rays, which alone leave the GPU latency-bound.
+// Positions are t0 + k dt as march_continue computes them, so the samples are those of a single march.
+constexpr int k_segments = 4;
+
+template <typename Visit>
+__device__ __forceinline__ int march_lattice(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
+                                             float t0, float dt, float t_far, uint32_t k_begin, uint32_t k_end,
+                                             Visit&& visit) {
+    const Vec3 inv_d(ray.d.x != 0.0f ? 1.0f / ray.d.x : 0.0f, ray.d.y != 0.0f ? 1.0f / ray.d.y : 0.0f,
+                     ray.d.z != 0.0f ? 1.0f / ray.d.z : 0.0f);
+    const float inv_dt = 1.0f / dt;
+    int n = 0;
+    for (uint32_t k = k_begin; k < k_end;) {
+        const float t = t0 + float(k) * dt;
+        if (!(t < t_far)) break;
+        const Vec3 p = ray.at(t);
+        const int cas = march_cascade(grid, p, dt);
+        if (grid.is_occupied(p, cas)) {
+            visit(MarchSample{p, t, dt}, n);
+            ++n;
+            ++k;
+            continue;
+        }
+        const float cell = grid.cascade_size(cas) / float(grid.resolution);
+        const float eps = fmaxf(1e-6f * cell, 1e-6f * t);
+        const float skip_cell = grid.coarse_occupied(p, cas) ? cell : cell * float(OccupancyGridView::k_coarse);
+        const float target = t + march_distance_to_cell_exit(p, ray.d, inv_d, skip_cell) + eps;
+        // The same lattice arithmetic as march_continue: the samples are the CPU march's.
+        const float kn = march_lattice_next(t0, inv_dt, k, target);
+        k = kn < float(k_end) ? uint32_t(kn) : k_end;
+    }
+    return n;
+}
+
+__global__ void __launch_bounds__(k_block) march_segmented_kernel(MarchRaysArgs a) {
+    const uint32_t gid = blockIdx.x * blockDim.x + threadIdx.x;
+    const uint32_t r = gid / k_segments;
+    const int seg = int(gid % k_segments);
+    const int lane = threadIdx.x & 31;
+    const int leader = lane & ~(k_segments - 1);
+    const bool active = r < a.n_rays;
+    TrainRay tr;
+    MarchCursor c;
+    bool ok = false;
+    if (active) {
+        tr = setup_ray(a, r);
+        ok = march_start(a.march, a.grid, tr.ray, tr.jitter, &c);
+    }
+    const float dt = ok ? march_step(a.march, c.t) : 1.0f;
+    uint32_t lattice = 0;
+    if (ok && c.t < c.t_far)
+        lattice = min(uint32_t(ceilf((c.t_far - c.t) / dt)) + 1u, uint32_t(a.march.max_samples));
+    const uint32_t k_begin = lattice * uint32_t(seg) / k_segments,
+                   k_end = lattice * uint32_t(seg + 1) / k_segments;
+    int mine = 0;
+    if (ok)
+        mine = march_lattice(a.march, a.grid, tr.ray, c.t, dt, c.t_far, k_begin, k_end,
+                             [](const MarchSample&, int) {});
+    // The ray's total and this segment's offset within it (the lanes of a ray are consecutive).
+    int before = 0, total = 0;
+#pragma unroll
+    for (int q = 0; q < k_segments; ++q) {
+        const int v = __shfl_sync(0xffffffffu, mine, leader + q);
+        total += v;
+        if (q < seg) before += v;
+    }
+    uint32_t base = 0;
+    if (seg == 0 && active) base = atomicAdd(&a.counters->marched, uint32_t(total));
+    base = __shfl_sync(0xffffffffu, base, leader);
+    if (!active) return;
+    const bool kept = uint64_t(base) + uint64_t(total) <= a.samples.capacity;
+    if (kept && mine > 0) {
+        const uint32_t at = base + uint32_t(before);
+        march_lattice(a.march, a.grid, tr.ray, c.t, dt, c.t_far, k_begin, k_end, [&](const MarchSample& s, int j) {
+            a.samples.pos[at + j] = s.position;
+            a.samples.dt[at + j] = s.dt;
+            a.samples.ray[at + j] = r;
+        });
+    }
+    if (seg == 0) {
+        if (kept) atomicAdd(&a.counters->rays_kept, 1u);
+        write_ray(a, r, tr, base, uint32_t(total), kept);
+    }
 }
 
 __device__ __forceinline__ double warp_sum(double v) {
@@ -131,6 +237,11 @@ int blocks_for(uint32_t n) { return int((n + k_block - 1) / k_block); }
 
 void march_training_rays(const MarchRaysArgs& a, cudaStream_t s) {
     if (a.n_rays == 0) return;
+    if (a.march.cone_angle == 0.0f) {
+        march_segmented_kernel<<<blocks_for(a.n_rays * k_segments), k_block, 0, s>>>(a);
+        NPT_CUDA_CHECK_LAUNCH("march_segmented_kernel");
+        return;
+    }
     march_training_rays_kernel<<<blocks_for(a.n_rays), k_block, 0, s>>>(a);
     NPT_CUDA_CHECK_LAUNCH("march_training_rays_kernel");
 }
