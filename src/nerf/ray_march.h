@@ -162,6 +162,32 @@ NPT_HD NPT_INLINE float march_lattice_next(float t0, float inv_dt, uint32_t k, f
     return kn > float(k) + 1.0f ? kn : float(k) + 1.0f;
 }
 
+// Moves a uniform-step march (cone_angle 0) to the first lattice point inside [box_min, box_max] and ends it
+// where the ray leaves the box. With the box around every occupied cell the samples do not change (no
+// occupied cell lies outside it), only the empty space before and after is no longer walked. Returns false
+// when the ray misses the box (nothing to march). Marches with a cone angle are left as they are.
+NPT_HD inline bool march_clip(const MarchParams& mp, const Ray& ray, Vec3 box_min, Vec3 box_max, MarchCursor* c) {
+    if (mp.cone_angle != 0.0f) return true;
+    MarchParams box = mp;
+    box.aabb_min = box_min;
+    box.aabb_max = box_max;
+    float t_in = 0.0f, t_out = 0.0f;
+    if (!march_bounds(box, ray, &t_in, &t_out)) return false;
+    const float dt = march_step(mp, c->t0);
+    if (t_in > c->t) {
+        // One lattice point early: a point a rounding before t_in may still lie in the box's first cell.
+        const float kn = ceilf((t_in - c->t0) / dt) - 1.0f;
+        if (!(kn < 4.0e9f)) return false;
+        if (kn > float(c->k)) {
+            c->k = uint32_t(kn);
+            c->t = c->t0 + float(c->k) * dt;
+        }
+    }
+    // One step of slack: a lattice point a rounding past t_out may still lie in the box's last cell.
+    c->t_far = fminf(c->t_far, t_out + dt);
+    return c->t < c->t_far;
+}
+
 // Continues the march: calls visit(MarchSample) for each sample in order until visit returns false (the
 // cursor then stands after that sample) or the march is done. Samples lie in occupied cells only; their dt is
 // the step taken at them. A view without occupancy (has_occupancy() false) counts every cell as occupied.

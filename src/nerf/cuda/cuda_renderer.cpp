@@ -31,6 +31,7 @@ struct CudaViewRenderer::Impl {
     std::string device;
     NerfLayout layout;
     MarchParams march;
+    Vec3 box_min, box_max;  // around the occupied cells
     cudaStream_t stream = nullptr;
     DeviceBuffer<float> params;
     DeviceBuffer<__half> mlp_half;
@@ -108,6 +109,8 @@ void CudaViewRenderer::Impl::run(const Camera& camera, const ViewOptions& option
     f.grid = {nullptr, model.occupancy.cascades(), model.occupancy.resolution(), occupied.data(),
               coarse.size() ? coarse.data() : nullptr};
     f.min_transmittance = model.config.march.min_transmittance;
+    f.box_min = box_min;
+    f.box_max = box_max;
     RenderSlots slots{slot_pos.data(), slot_dt.data(), slot_pixel.data(), slot_first.data(), slot_used.data(),
                       counts.data() + 2, slot_scratch.data()};
 
@@ -176,6 +179,24 @@ CudaViewRenderer::CudaViewRenderer(const NerfModel& model, Precision precision)
         if (g.occupied[i]) bits[i >> 5] |= 1u << (i & 31);
     I.occupied.upload(bits, "the occupancy grid", "occupancy.resolution");
     const int res = model.occupancy.resolution();
+    // The box around the occupied cells: rays are marched inside it only (march_clip).
+    {
+        Vec3 lo(1e30f), hi(-1e30f);
+        const size_t cells = size_t(res) * res * res;
+        for (size_t i = 0; i < model.occupancy.cell_count(); ++i) {
+            if (!g.occupied[i]) continue;
+            const int c = int(i / cells);
+            const size_t local = i % cells;
+            const float size = float(1 << c), base = 0.5f - 0.5f * size, w = size / float(res);
+            const size_t xyz[3] = {local % res, (local / res) % res, local / (size_t(res) * res)};
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = std::min(lo[a], base + float(xyz[a]) * w);
+                hi[a] = std::max(hi[a], base + float(xyz[a] + 1) * w);
+            }
+        }
+        I.box_min = lo;
+        I.box_max = hi;
+    }
     if (coarse_cells_fit(res)) {
         // Coarse cells for skipping empty space (OccupancyGridView::coarse_bits).
         const int k = OccupancyGridView::k_coarse, rc = res / k;

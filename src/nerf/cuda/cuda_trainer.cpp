@@ -197,6 +197,7 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     ma.rays = rays;
     ma.samples = samples;
     ma.scratch = march_scratch.data();
+    ma.occupied_box = occupancy->occupied_box();
     ma.counters = ctr;
     march_training_rays(ma, stream);
     mark(m_marched);

@@ -26,6 +26,8 @@ DeviceOccupancy::DeviceOccupancy(const OccupancyGrid& host, float threshold, cud
     m_dev.estimate = m_estimate.data();
     m_dev.occupied = m_occupied.data();
     m_dev.occupied_bits = m_bits.data();
+    m_box.allocate(6);
+    m_dev.occupied_box = m_box.data();
     if (coarse_cells_fit(host.resolution())) {
         m_coarse.allocate(coarse_words(host.cascades(), host.resolution()), "the occupancy grid");
         m_dev.coarse_bits = m_coarse.data();

@@ -26,6 +26,8 @@ class DeviceOccupancy {
         return {nullptr, m_dev.cascades, m_dev.resolution, m_bits.data(), m_coarse.size() ? m_coarse.data() : nullptr};
     }
     uint32_t cells() const { return m_dev.cells; }
+    // The box around the occupied cells, as float keys (OccupancyDevice::occupied_box).
+    const uint32_t* occupied_box() const { return m_box.data(); }
 
     // One update with the current network: `grid_params` (fp32 hash table) and `mlp_half` (fp16 weights).
     void update(const OccupancyConfig& cfg, const NerfLayout& layout, const float* grid_params,
@@ -38,7 +40,7 @@ class DeviceOccupancy {
     OccupancyDevice m_dev;
     gpu::DeviceBuffer<float> m_density, m_estimate;
     gpu::DeviceBuffer<uint8_t> m_occupied;
-    gpu::DeviceBuffer<uint32_t> m_bits, m_coarse;
+    gpu::DeviceBuffer<uint32_t> m_bits, m_coarse, m_box;
     gpu::DeviceBuffer<uint32_t> m_list, m_count;
     gpu::DeviceBuffer<double> m_sum;
     // Points of one chunk of an update.

@@ -87,6 +87,17 @@ __global__ void threshold_kernel(OccupancyDevice g, float threshold) {
     const unsigned mask = __ballot_sync(0xffffffffu, occ);
     // A warp covers 32 consecutive cells starting at a multiple of 32: one word of the bit field.
     if ((threadIdx.x & 31) == 0 && i < g.cells) g.occupied_bits[i >> 5] = mask;
+    if (occ && g.occupied_box) {
+        const uint32_t r = uint32_t(g.resolution), cells = r * r * r;
+        const int c = int(i / cells);
+        const uint32_t local = i % cells;
+        const float size = float(1 << c), lo = 0.5f - 0.5f * size, w = size / float(r);
+        const uint32_t xyz[3] = {local % r, (local / r) % r, local / (r * r)};
+        for (int a = 0; a < 3; ++a) {
+            atomicMin(g.occupied_box + a, float_key(lo + float(xyz[a]) * w));
+            atomicMax(g.occupied_box + 3 + a, float_key(lo + float(xyz[a] + 1) * w));
+        }
+    }
     if (occ && g.coarse_bits) {
         const uint32_t r = uint32_t(g.resolution), cells = r * r * r, k = OccupancyGridView::k_coarse;
         const uint32_t c = i / cells, local = i % cells, rc = r / k;
@@ -134,6 +145,11 @@ void occupancy_apply(const OccupancyDevice& g, float decay, float threshold, cud
     if (g.coarse_bits)
         gpu::cuda_check(cudaMemsetAsync(g.coarse_bits, 0, coarse_words(g.cascades, g.resolution) * 4, s),
                         "cudaMemsetAsync");
+    if (g.occupied_box) {
+        // min keys start at the largest key, max keys at the smallest (an empty grid keeps an empty box).
+        gpu::cuda_check(cudaMemsetAsync(g.occupied_box, 0xff, 3 * sizeof(uint32_t), s), "cudaMemsetAsync");
+        gpu::cuda_check(cudaMemsetAsync(g.occupied_box + 3, 0, 3 * sizeof(uint32_t), s), "cudaMemsetAsync");
+    }
     decay_kernel<<<blocks_for(g.cells), k_block, 0, s>>>(g, decay);
     NPT_CUDA_CHECK_LAUNCH("occupancy decay_kernel");
     threshold_kernel<<<blocks_for(g.cells), k_block, 0, s>>>(g, threshold);

@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include "core/vec.h"
 
@@ -24,10 +25,26 @@ struct OccupancyDevice {
     uint32_t* occupied_list = nullptr;  // indices of occupied cells after the last update
     uint32_t* occupied_count = nullptr;
     double* density_sum = nullptr;
+    // The box around every occupied cell (model space), as order-preserving integer keys of its floats:
+    // min x, y, z, then max x, y, z (float_key / float_of_key).
+    uint32_t* occupied_box = nullptr;
     int cascades = 1;
     int resolution = 128;
     uint32_t cells = 0;
 };
+
+// Floats as unsigned integers of the same order (for atomicMin/Max on floats of either sign), and back.
+inline __host__ __device__ uint32_t float_key(float f) {
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+inline __host__ __device__ float float_of_key(uint32_t k) {
+    const uint32_t u = (k & 0x80000000u) ? (k & 0x7fffffffu) : ~k;
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
 
 // Words of the coarse bit field, and whether a resolution has whole coarse cells (OccupancyGridView).
 size_t coarse_words(int cascades, int resolution);

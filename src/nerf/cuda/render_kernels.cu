@@ -39,7 +39,8 @@ __global__ void __launch_bounds__(k_block) init_kernel(RenderFrame f, RayCamera 
         RenderRay r;
         r.ray = pixel_ray(cam, float(x) + 0.5f, float(y) + 0.5f);
         // A fixed mid-step offset, as render_view: an image must not change from one render to the next.
-        live = march_start(f.march, f.grid, r.ray, 0.5f, &r.cursor) && !r.cursor.done(f.march);
+        live = march_start(f.march, f.grid, r.ray, 0.5f, &r.cursor) &&
+               march_clip(f.march, r.ray, f.box_min, f.box_max, &r.cursor) && !r.cursor.done(f.march);
         f.rays[i] = r;
         f.dirs[i] = r.ray.d;
         if (!live) write_pixel(f, i, Rgb(0.0f), 0.0f);

@@ -31,6 +31,7 @@ struct RenderFrame {
     MarchParams march;
     OccupancyGridView grid;
     float min_transmittance = 1e-4f;
+    Vec3 box_min{-1e30f, -1e30f, -1e30f}, box_max{1e30f, 1e30f, 1e30f};  // around the occupied cells
 };
 
 struct RenderSlots {              // the samples of a round, packed (each live ray reserves what it marched)

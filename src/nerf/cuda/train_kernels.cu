@@ -3,6 +3,7 @@
 #include "core/cuda/device_buffer.h"
 #include "core/rng.h"
 #include "nerf/composite.h"
+#include "nerf/cuda/occupancy_kernels.h"
 #include "nerf/loss.h"
 
 namespace npt::nerf::cuda {
@@ -148,16 +149,28 @@ __global__ void __launch_bounds__(k_block) march_segmented_kernel(MarchRaysArgs 
     if (active) {
         tr = setup_ray(a, r);
         ok = march_start(a.march, a.grid, tr.ray, tr.jitter, &c);
+        // Only the part of the lattice inside the box around the occupied cells can hold samples.
+        if (ok && a.occupied_box) {
+            const Vec3 lo(float_of_key(a.occupied_box[0]), float_of_key(a.occupied_box[1]),
+                          float_of_key(a.occupied_box[2]));
+            const Vec3 hi(float_of_key(a.occupied_box[3]), float_of_key(a.occupied_box[4]),
+                          float_of_key(a.occupied_box[5]));
+            ok = march_clip(a.march, tr.ray, lo, hi, &c);
+        }
     }
-    const float dt = ok ? march_step(a.march, c.t) : 1.0f;
-    uint32_t lattice = 0;
-    if (ok && c.t < c.t_far)
-        lattice = min(uint32_t(ceilf((c.t_far - c.t) / dt)) + 1u, uint32_t(a.march.max_samples));
-    const uint32_t k_begin = lattice * uint32_t(seg) / k_segments,
-                   k_end = lattice * uint32_t(seg + 1) / k_segments;
+    const float dt = ok ? march_step(a.march, c.t0) : 1.0f;
+    uint32_t first = 0, lattice = 0;  // lattice indices [first, lattice) of the ray
+    if (ok && c.t < c.t_far) {
+        first = c.k;
+        lattice = min(uint32_t(ceilf((c.t_far - c.t0) / dt)) + 1u, uint32_t(a.march.max_samples));
+        if (lattice < first) lattice = first;
+    }
+    const uint32_t span = lattice - first;
+    const uint32_t k_begin = first + span * uint32_t(seg) / k_segments,
+                   k_end = first + span * uint32_t(seg + 1) / k_segments;
     int mine = 0;
     if (ok)
-        mine = march_lattice(a.march, a.grid, tr.ray, c.t, dt, c.t_far, k_begin, k_end,
+        mine = march_lattice(a.march, a.grid, tr.ray, c.t0, dt, c.t_far, k_begin, k_end,
                              [](const MarchSample&, int) {});
     // The ray's total and this segment's offset within it (the lanes of a ray are consecutive).
     int before = 0, total = 0;
@@ -174,7 +187,7 @@ __global__ void __launch_bounds__(k_block) march_segmented_kernel(MarchRaysArgs 
     const bool kept = uint64_t(base) + uint64_t(total) <= a.samples.capacity;
     if (kept && mine > 0) {
         const uint32_t at = base + uint32_t(before);
-        march_lattice(a.march, a.grid, tr.ray, c.t, dt, c.t_far, k_begin, k_end, [&](const MarchSample& s, int j) {
+        march_lattice(a.march, a.grid, tr.ray, c.t0, dt, c.t_far, k_begin, k_end, [&](const MarchSample& s, int j) {
             a.samples.pos[at + j] = s.position;
             a.samples.dt[at + j] = s.dt;
             a.samples.ray[at + j] = r;

@@ -73,6 +73,7 @@ struct MarchRaysArgs {
     RayBuffers rays;
     SampleBuffers samples;
     float4* scratch = nullptr;  // k_march_scratch per ray: position and dt
+    const uint32_t* occupied_box = nullptr;  // float keys of the box around the occupied cells (or null)
     StepCounters* counters = nullptr;
 };
 void march_training_rays(const MarchRaysArgs& a, cudaStream_t s);
