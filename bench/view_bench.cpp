@@ -78,6 +78,15 @@ int main(int argc, char** argv) {
         for (int k = 0; k < frames; ++k)
             cams.push_back(nerf::orbit_camera(orbit, 2.0 * std::numbers::pi * k / frames));
         for (int k = 0; k < 3; ++k) r16->render_ms(cams[size_t(k) % cams.size()], {});
+        // The GPU renderer's first-round size only moves the time: measure a few, report each.
+        if (backend == nerf::Backend::cuda)
+            for (int first : {4, 16, 32}) {
+                nerf::ViewOptions o;
+                o.gpu_first_round = first;
+                std::vector<double> t;
+                for (const nerf::Camera& c : cams) t.push_back(r16->render_ms(c, o));
+                std::printf("  first round of %d samples per ray: median %.3f ms\n", first, median(t));
+            }
         std::vector<double> ms;
         for (const nerf::Camera& c : cams) ms.push_back(r16->render_ms(c, {}));
         double sum = 0;

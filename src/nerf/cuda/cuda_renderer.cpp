@@ -119,7 +119,8 @@ void CudaViewRenderer::Impl::run(const Camera& camera, const ViewOptions& option
     uint32_t n = read_count(0);
     int cur = 0;
     const uint32_t capacity = uint32_t(slot_pos.size());  // >= one slot per pixel (resize)
-    for (int k = k_first_round; n > 0; k = std::min(2 * k, k_max_round)) {
+    const int first = options.gpu_first_round > 0 ? std::min(options.gpu_first_round, k_max_round) : k_first_round;
+    for (int k = first; n > 0; k = std::min(2 * k, k_max_round)) {
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / n)));
         const uint32_t m = n * uint32_t(kk);  // samples this round at most
         cuda_check(cudaMemsetAsync(slots.count, 0, sizeof(uint32_t), stream), "cudaMemsetAsync");
