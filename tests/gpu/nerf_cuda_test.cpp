@@ -12,6 +12,8 @@
 
 #include "core/rng.h"
 #include "bake/bake_grid.h"
+#include "core/cuda/device_buffer.h"
+#include "core/error.h"
 #include "nerf/backend/nerf_backend.h"
 #include "nerf/cuda/cuda_field.h"
 #include "nerf/cuda/cuda_renderer.h"
@@ -336,6 +338,30 @@ TEST(NerfCuda, GpuBakeEqualsTheCpuBake) {
     }
     EXPECT_LT(max_sigma, 1e-4);
     EXPECT_LT(max_rgb, 1e-4);
+}
+
+}  // namespace
+}  // namespace npt::nerf
+
+namespace npt::nerf {
+namespace {
+
+// Running out of device memory is one line that says how much was asked for and what to lower.
+TEST(NerfCuda, OutOfMemoryIsOneLineNamingTheSizeAndWhatToLower) {
+    try {
+        gpu::DeviceBuffer<float> huge(size_t(1) << 40, "the sample buffers", "training.cuda_batch_samples");
+        FAIL() << "a 4 TiB allocation succeeded";
+    } catch (const Error& e) {
+        const std::string m = e.what();
+        EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+        EXPECT_NE(m.find("GPU out of memory"), std::string::npos) << m;
+        EXPECT_NE(m.find("the sample buffers"), std::string::npos) << m;
+        EXPECT_NE(m.find("4194304.0 MiB"), std::string::npos) << m;
+        EXPECT_NE(m.find("lower training.cuda_batch_samples"), std::string::npos) << m;
+    }
+    // The device is still usable afterwards.
+    gpu::DeviceBuffer<float> small(1024);
+    EXPECT_EQ(small.size(), 1024u);
 }
 
 }  // namespace
