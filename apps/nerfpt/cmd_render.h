@@ -18,7 +18,7 @@ struct RenderArgs {
     uint64_t seed = 0;
     bool seed_given = false;
     int threads = 0;
-    std::string backend = "cpu";
+    std::string backend;  // "", cpu or optix (render/backend/render_backend.h)
     std::string camera;
     float exposure = 0.0f;
 };
