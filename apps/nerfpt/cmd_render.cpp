@@ -97,6 +97,9 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
            "PNG only: multiply by 2^STOPS before the sRGB curve and clamp, -20..20 (default: 0); the "
            "EXR is always unscaled")
         ->check(CLI::Range(-20.0f, 20.0f));
+    cmd->add_flag("--denoise", args.denoise,
+                  "OptiX backend: run OptiX's AI denoiser (albedo and normal guides); OUT.exr and OUT.png are the "
+                  "denoised image, OUT.noisy.exr the render as it came out");
     return cmd;
 }
 
@@ -124,6 +127,8 @@ void check_output(const fs::path& out) {
 
 int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
     if (args.backend == "optix") render::choose_render_backend(args.backend, nullptr);  // fails before loading
+    if (args.denoise && args.backend != "optix")
+        throw Error("--denoise: the denoiser is OptiX's; add --backend optix");
     const fs::path out_exr = args.output;
     fs::path out_png = out_exr;
     out_png.replace_extension(".png");
@@ -155,17 +160,28 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     ps.style = progress_style(stream_is_tty(stderr), global.quiet);
     Progress progress(ps, std::cerr);
     const auto t0 = std::chrono::steady_clock::now();
+    Image denoised;
     const Image image = render::render_with_backend(
-        scene, resolved, [&progress](uint64_t done, uint64_t total) { progress.update(done, total); });
+        scene, resolved, [&progress](uint64_t done, uint64_t total) { progress.update(done, total); },
+        args.denoise ? &denoised : nullptr);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     progress.finish();
 
+    fs::path out_noisy = out_exr;
+    out_noisy.replace_extension(".noisy.exr");
     {
-        auto no_interrupt = interrupts.hold();  // both files complete, or an interrupt waits for them
-        write_exr(out_exr, image);
-        write_png(out_png, image, args.exposure);
+        auto no_interrupt = interrupts.hold();  // every file complete, or an interrupt waits for them
+        if (args.denoise) {
+            write_exr(out_noisy, image);
+            write_exr(out_exr, denoised);
+            write_png(out_png, denoised, args.exposure);
+        } else {
+            write_exr(out_exr, image);
+            write_png(out_png, image, args.exposure);
+        }
     }
     const double samples = double(resolved.width) * resolved.height * resolved.spp;
+    if (args.denoise) fmt::print("wrote {} (denoised) and {} (as rendered)\n", out_exr.string(), out_noisy.string());
     fmt::print("wrote {}\nwrote {}\n", out_exr.string(), out_png.string());
     fmt::print("rendered {}x{} at {} spp in {} ({} samples/s)\n", resolved.width, resolved.height,
                resolved.spp, format_seconds(seconds), format_count(seconds > 0 ? samples / seconds : 0.0));

@@ -51,11 +51,13 @@ std::string choose_render_backend(const std::string& requested, std::string* not
     return "cpu";
 }
 
-Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress) {
+Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress,
+                          Image* denoised) {
 #if NERFPT_HAVE_OPTIX
-    if (resolved.backend == "optix") return gpu::render_optix(scene, resolved, progress);
+    if (resolved.backend == "optix") return gpu::render_optix(scene, resolved, progress, denoised);
 #endif
     if (resolved.backend == "optix") throw Error("--backend optix: " + optix_unavailable_reason());
+    if (denoised) throw Error("--denoise: the denoiser is OptiX's and needs --backend optix");
     return render(scene, resolved, progress);
 }
 

@@ -16,7 +16,9 @@ bool optix_backend_built();
 // be used: no silent fallback).
 std::string choose_render_backend(const std::string& requested, std::string* note);
 
-// Renders with resolved.backend ("cpu" or "optix").
-Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress = {});
+// Renders with resolved.backend ("cpu" or "optix"). With `denoised` (OptiX only: npt::Error otherwise), the
+// denoiser's image goes there and the noisy one is returned.
+Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress = {},
+                          Image* denoised = nullptr);
 
 }  // namespace npt::render

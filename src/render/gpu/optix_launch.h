@@ -16,6 +16,10 @@ struct LaunchParams {
     render::SceneView scene;  // device copies (device_scene.h)
     OptixTraversableHandle handle = 0;
     float4* accum = nullptr;  // width * height running sums of radiance (w unused)
+    // The denoiser's guides, written by the launch with sample_begin 0 (null: no denoising): the first
+    // surface's albedo and its shading normal in camera axes (right, up, towards the camera), per pixel.
+    float4* albedo = nullptr;
+    float4* normal = nullptr;
     unsigned long long* dropped = nullptr;  // samples that were NaN or infinite (dropped, as on the CPU)
     int width = 0, height = 0;
     uint32_t sample_begin = 0, sample_count = 0;  // the sample indices this launch adds per pixel

@@ -13,6 +13,7 @@
 #include "render/gpu/device_scene.h"
 #include "render/gpu/optix_accel.h"
 #include "render/gpu/optix_context.h"
+#include "render/gpu/optix_denoiser.h"
 #include "render/gpu/optix_launch.h"
 #include "render/gpu/optix_pipeline.h"
 #include "render/scene_data.h"
@@ -25,7 +26,7 @@ constexpr double k_launch_target_seconds = 0.1;
 }  // namespace
 
 Image render_optix(const scene::Scene& scene, const render::RenderOptions& options,
-                   const render::ProgressFn& progress) {
+                   const render::ProgressFn& progress, Image* denoised) {
     const std::string device = nerf::cuda::require_cuda_device();
     spdlog::debug("OptiX on {}", device);
     const int width = options.width, height = options.height, spp = options.spp;
@@ -47,6 +48,11 @@ Image render_optix(const scene::Scene& scene, const render::RenderOptions& optio
     DeviceBuffer<unsigned long long> dropped(1);
     dropped.zero_async(stream);
     DeviceBuffer<LaunchParams> params(1);
+    DeviceBuffer<float4> albedo, normal;  // the denoiser's guides
+    if (denoised) {
+        albedo.allocate(pixels, "the denoiser's guides", "--res");
+        normal.allocate(pixels, "the denoiser's guides", "--res");
+    }
 
     LaunchParams p;
     p.scene = dev.view();
@@ -56,6 +62,8 @@ Image render_optix(const scene::Scene& scene, const render::RenderOptions& optio
     p.width = width;
     p.height = height;
     p.seed = options.seed;
+    p.albedo = albedo.data();
+    p.normal = normal.data();
     p.path.max_depth = options.max_depth;
 
     const uint64_t total = uint64_t(pixels) * uint64_t(spp);
@@ -87,6 +95,7 @@ Image render_optix(const scene::Scene& scene, const render::RenderOptions& optio
         image.pixels[3 * i + 1] = sums[i].y * inv;
         image.pixels[3 * i + 2] = sums[i].z * inv;
     }
+    if (denoised) *denoised = optix_denoise(ctx.get(), stream, image, albedo.data(), normal.data());
     return image;
 }
 

@@ -7,8 +7,9 @@
 
 namespace npt::gpu {
 
-// Throws npt::Error with a one-line reason when no GPU, no driver or no OptiX runtime can be used.
+// Throws npt::Error with a one-line reason when no GPU, no driver or no OptiX runtime can be used. With
+// `denoised`, also runs the denoiser (albedo and normal guides) and puts its image there.
 Image render_optix(const scene::Scene& scene, const render::RenderOptions& options,
-                   const render::ProgressFn& progress);
+                   const render::ProgressFn& progress, Image* denoised = nullptr);
 
 }  // namespace npt::gpu

@@ -72,8 +72,26 @@ extern "C" __global__ void __raygen__render() {
         else
             atomicAdd(params.dropped, 1ull);
     }
-    float4& a = params.accum[size_t(y) * size_t(params.width) + size_t(x)];
+    const size_t pixel = size_t(y) * size_t(params.width) + size_t(x);
+    float4& a = params.accum[pixel];
     a = make_float4(a.x + sum.x, a.y + sum.y, a.z + sum.z, 0.0f);
+
+    if (params.albedo && params.sample_begin == 0) {
+        // Guides for the denoiser: what the pixel's centre sees first.
+        const render::CameraView& cam = params.scene.camera;
+        const Ray ray = render::generate_camera_ray(cam, x, y, Vec2(0.5f, 0.5f));
+        render::Hit hit;
+        Rgb albedo(0.0f);
+        Vec3 n(0.0f);
+        if (tracer.intersect(ray, INFINITY, &hit)) {
+            const render::SurfaceInteraction si = render::make_surface_interaction(params.scene, hit, ray);
+            albedo = Rgb(clampf(si.bsdf.base_color.x, 0.0f, 1.0f), clampf(si.bsdf.base_color.y, 0.0f, 1.0f),
+                         clampf(si.bsdf.base_color.z, 0.0f, 1.0f));
+            n = Vec3(dot(si.shading.n, cam.right), dot(si.shading.n, cam.up), -dot(si.shading.n, cam.forward));
+        }
+        params.albedo[pixel] = make_float4(albedo.x, albedo.y, albedo.z, 0.0f);
+        params.normal[pixel] = make_float4(n.x, n.y, n.z, 0.0f);
+    }
 }
 
 extern "C" __global__ void __closesthit__radiance() {
