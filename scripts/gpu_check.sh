@@ -4,7 +4,8 @@
 #                                   the benchmarks; the OptiX backend when .optix/ holds the SDK headers) and
 #                                   pack them with the non-system shared libraries they need into
 #                                   .gpu/bundle.tar.xz, plus the lego views the benchmarks use (100 training
-#                                   views, every 4th test view) and the Cornell reference scenes into .gpu/
+#                                   views, every 4th test view), the Cornell reference scenes and the NeRF
+#                                   demo scenes into .gpu/
 #   scripts/gpu_check.sh run        there (carry .gpu): unpack and run every GPU-labelled test
 #   scripts/gpu_check.sh bench ...  there, after run: bench/train_bench with the given arguments
 # The unpacked binaries are in /tmp/nerfpt-gpu/bin; NERFPT_CLI points the tests at the CLI there.
@@ -46,6 +47,11 @@ pack)
         rm -rf .gpu/scenes && mkdir -p .gpu/scenes
         cp -r "$scenes/cornell" "$scenes/cornell_volume" .gpu/scenes/
     fi
+    # The model-in-scene demo (the NeRF queried directly, and its 256^3 bake), for the OptiX parity test and
+    # render_bench; the GPU run trains the lego.npt these name.
+    rm -rf .gpu/nerf_demo && mkdir -p .gpu/nerf_demo
+    python3 scripts/make_nerf_demo_scene.py .gpu/nerf_demo/scene.gltf >/dev/null
+    python3 scripts/make_nerf_demo_scene.py .gpu/nerf_demo/scene_baked.gltf lego_256.vdb >/dev/null
     src=${NERFPT_SHARED_DATA:-../shared/data}/nerf_synthetic/lego
     if [[ -d $src ]]; then
         dst=.gpu/nerf_synthetic/lego

@@ -82,8 +82,8 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads (default: 0)")
         ->check(CLI::Range(0, 4096));
     cmd->add_option("--backend", args.backend,
-                    "Renderer: cpu (Embree + TBB) or optix (a GPU; built when the OptiX SDK headers were found, "
-                    "and not yet validated on a GPU) (default: cpu)")
+                    "Renderer: cpu (Embree + TBB) or optix (the same integrator on a GPU; built when the OptiX SDK "
+                    "headers were found) (default: optix where built and a GPU is usable, else cpu)")
         ->check(CLI::Validator(
             [](std::string& name) {
                 if (name == "cpu" || name == "optix" || name == "auto") return std::string();

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "core/error.h"
 #include "core/image_io.h"
 #include "core/image_stats.h"
 #include "render/backend/render_backend.h"
@@ -94,7 +95,51 @@ TEST(OptixRender, ExampleSceneMatchesTheCpu) {
     for (size_t k = 0; k < 3; ++k) EXPECT_NEAR(cmp.mean_test[k], cmp.mean_ref[k], 0.005 * cmp.mean_ref[k] + 1e-4);
 }
 
-// The denoiser: at 4 spp its image must be closer to the 4512-spp Cycles reference than the noisy render.
+// The model-in-scene demo (scripts/make_nerf_demo_scene.py: lego on a pedestal in a Cornell box beside a mirror
+// sphere): the NeRF queried directly in device code, and its 256^3 bake, against the CPU backend at the same
+// seeds, as the reference scenes above. The model is trained here on the GPU (15 s) and baked on the GPU.
+TEST(OptixRender, NerfDemoMatchesTheCpuDirectAndBaked) {
+    if (!render::optix_backend_built()) GTEST_SKIP() << "built without the OptiX backend";
+    const auto lego = test::shared_data() / "nerf_synthetic" / "lego";
+    NPT_REQUIRE_SHARED(lego / "transforms_train.json");
+    // The demo scenes, written by scripts/gpu_check.sh pack (python3 scripts/make_nerf_demo_scene.py).
+    const auto scenes = test::shared_data() / "nerf_demo";
+    if (!std::filesystem::exists(scenes / "scene.gltf"))
+        GTEST_SKIP() << "missing " << scenes / "scene.gltf" << " (scripts/gpu_check.sh pack writes it)";
+    const auto dir = test::temp_dir();
+    for (const char* f : {"scene.gltf", "scene_baked.gltf"}) std::filesystem::copy_file(scenes / f, dir / f);
+    ASSERT_EQ(test::run_cli({"train", lego.string(), "-o", (dir / "lego.npt").string(), "--backend", "cuda", "--time",
+                             "15", "-q"},
+                            dir / "train.log"),
+              0)
+        << test::read_text(dir / "train.log");
+    ASSERT_EQ(test::run_cli({"bake", (dir / "lego.npt").string(), "-o", (dir / "lego_256.vdb").string(), "--res", "256",
+                             "--backend", "cuda", "-q"},
+                            dir / "bake.log"),
+              0)
+        << test::read_text(dir / "bake.log");
+
+    for (const char* name : {"scene.gltf", "scene_baked.gltf"}) {
+        const scene::Scene scene = scene::load_scene(dir / name);
+        render::RenderOptions o;
+        o.width = 320;
+        o.height = 320;
+        o.spp = 32;
+        o.seed = 7;
+        const Image g1 = render_on(scene, o, "optix"), c1 = render_on(scene, o, "cpu");
+        o.seed = 8;
+        const Image g2 = render_on(scene, o, "optix");
+        const double same_seed = compare_images(g1, c1).rel_mse, other_seed = compare_images(g1, g2).rel_mse;
+        std::printf("%s: OptiX vs CPU at the same seed %.3g, two OptiX seeds %.3g\n", name, same_seed, other_seed);
+        EXPECT_LT(same_seed, 0.5 * other_seed) << name;
+        const ImageComparison cmp = compare_images(average(g1, g2), c1);
+        for (size_t k = 0; k < 3; ++k)
+            EXPECT_NEAR(cmp.mean_test[k], cmp.mean_ref[k], 0.005 * cmp.mean_ref[k] + 1e-4) << name << " channel " << k;
+    }
+}
+
+// The denoiser: at 4 spp its image must be closer to the 4512-spp Cycles reference than the noisy render. Some
+// driver installs lack the denoiser's weights (the GPU machine's did); that is reported, not failed.
 TEST(OptixRender, DenoiserBringsAFewSamplesCloserToTheReference) {
     if (!render::optix_backend_built()) GTEST_SKIP() << "built without the OptiX backend";
     const auto folder = test::shared_data() / "scenes" / "cornell";
@@ -107,8 +152,14 @@ TEST(OptixRender, DenoiserBringsAFewSamplesCloserToTheReference) {
     o.spp = 4;
     o.seed = 5;
     o.backend = "optix";
-    Image denoised;
-    const Image noisy = render::render_with_backend(scene, render::resolve_options(scene, o), {}, &denoised);
+    Image denoised, noisy;
+    try {
+        noisy = render::render_with_backend(scene, render::resolve_options(scene, o), {}, &denoised);
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        if (what.find("nvoptix.bin") != std::string::npos) GTEST_SKIP() << what;
+        throw;
+    }
     const double e_noisy = compare_images(noisy, ref).rel_mse, e_denoised = compare_images(denoised, ref).rel_mse;
     std::printf("4 spp: relMSE noisy %.4g, denoised %.4g\n", e_noisy, e_denoised);
     EXPECT_LT(e_denoised, 0.5 * e_noisy);

@@ -19,10 +19,6 @@ bool optix_backend_built() {
 
 namespace {
 
-// OptiX becomes the default renderer once its parity tests (tests/gpu/optix_render_test.cpp) have passed on a
-// GPU; until then it is used only when asked for with --backend optix.
-constexpr bool k_optix_is_default = false;
-
 std::string optix_unavailable_reason() {
 #if NERFPT_HAVE_OPTIX
     std::string why;
@@ -43,7 +39,6 @@ std::string choose_render_backend(const std::string& requested, std::string* not
     }
     if (!requested.empty() && requested != "auto")
         throw Error("--backend: '" + requested + "' is not a renderer (cpu, optix)");
-    if (!k_optix_is_default) return "cpu";
     const std::string why = optix_unavailable_reason();
     if (why.empty()) return "optix";
     // Only worth a note where the GPU renderer exists and could have been used.
@@ -51,14 +46,47 @@ std::string choose_render_backend(const std::string& requested, std::string* not
     return "cpu";
 }
 
-Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress,
-                          Image* denoised) {
+namespace {
+
+class CpuSceneRenderer final : public SceneRenderer {
+  public:
+    explicit CpuSceneRenderer(const scene::Scene& scene) : m_scene(scene) {}
+    Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised) override {
+        if (denoised) throw Error("--denoise: the denoiser is OptiX's and needs --backend optix");
+        return render::render(m_scene, resolved, progress);
+    }
+
+  private:
+    const scene::Scene& m_scene;
+};
+
 #if NERFPT_HAVE_OPTIX
-    if (resolved.backend == "optix") return gpu::render_optix(scene, resolved, progress, denoised);
+class OptixSceneRenderer final : public SceneRenderer {
+  public:
+    OptixSceneRenderer(const scene::Scene& scene, const RenderOptions& resolved)
+        : m_renderer(scene, resolved.width, resolved.height) {}
+    Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised) override {
+        return m_renderer.render(resolved, progress, denoised);
+    }
+
+  private:
+    gpu::OptixRenderer m_renderer;
+};
+#endif
+
+}  // namespace
+
+std::unique_ptr<SceneRenderer> prepare_renderer(const scene::Scene& scene, const RenderOptions& resolved) {
+#if NERFPT_HAVE_OPTIX
+    if (resolved.backend == "optix") return std::make_unique<OptixSceneRenderer>(scene, resolved);
 #endif
     if (resolved.backend == "optix") throw Error("--backend optix: " + optix_unavailable_reason());
-    if (denoised) throw Error("--denoise: the denoiser is OptiX's and needs --backend optix");
-    return render(scene, resolved, progress);
+    return std::make_unique<CpuSceneRenderer>(scene);
+}
+
+Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress,
+                          Image* denoised) {
+    return prepare_renderer(scene, resolved)->render(resolved, progress, denoised);
 }
 
 }  // namespace npt::render

@@ -1,6 +1,7 @@
-// The scene's acceleration structures: one geometry AS per mesh (world-space triangles, as the CPU's Embree
-// scene) and an instance AS over them with identity transforms, so that an instance's id is its mesh's index
-// (what the closest-hit program reports). Compacted after the build.
+// The scene's acceleration structure: one geometry AS over every mesh's world-space triangles (as the CPU's
+// Embree scene), one build input per mesh, so that a hit's SBT record (one per build input and ray type)
+// names its mesh. A single level: without RT cores traversal runs on the SMs, and an instance level over
+// overlapping meshes (a room's walls) costs a second traversal per ray. Compacted after the build.
 #pragma once
 
 #include <cuda_runtime.h>
@@ -17,15 +18,13 @@ class OptixAccel {
   public:
     OptixAccel(OptixDeviceContext ctx, const DeviceScene& scene, cudaStream_t stream);
     OptixTraversableHandle handle() const { return m_root; }  // 0 for a scene without triangles
-    size_t bytes() const;
+    // The mesh index of each build input (meshes without triangles have none), in SBT order.
+    const std::vector<uint32_t>& input_meshes() const { return m_input_meshes; }
+    size_t bytes() const { return m_gas.bytes(); }
 
   private:
-    OptixTraversableHandle build(OptixDeviceContext ctx, const OptixBuildInput& input, bool compact,
-                                 DeviceBuffer<unsigned char>& out, cudaStream_t stream);
-
-    std::vector<DeviceBuffer<unsigned char>> m_gas;
-    DeviceBuffer<OptixInstance> m_instances;
-    DeviceBuffer<unsigned char> m_ias;
+    std::vector<uint32_t> m_input_meshes;
+    DeviceBuffer<unsigned char> m_gas;
     OptixTraversableHandle m_root = 0;
 };
 

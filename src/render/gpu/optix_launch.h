@@ -12,11 +12,19 @@ namespace npt::gpu {
 
 enum RayType : unsigned { k_ray_radiance = 0, k_ray_shadow = 1, k_ray_types = 2 };
 
+// The data of a hit-group record (after its header): which mesh the build input is, as Embree's geomID.
+struct HitRecordData {
+    uint32_t mesh;
+};
+
 struct LaunchParams {
     render::SceneView scene;  // device copies (device_scene.h)
     OptixTraversableHandle handle = 0;
-    float4* accum = nullptr;  // width * height running sums of radiance (w unused)
-    // The denoiser's guides, written by the launch with sample_begin 0 (null: no denoising): the first
+    // slots planes of width * height running sums of radiance (w unused): launch index z adds samples
+    // sample_begin + z, + z + slots, ... of its pixel to plane z (optix_renderer.cpp adds the planes).
+    float4* accum = nullptr;
+    uint32_t slots = 1;
+    // The denoiser's guides, written by the launch with sample_begin 0, slot 0 (null: no denoising): the first
     // surface's albedo and its shading normal in camera axes (right, up, towards the camera), per pixel.
     float4* albedo = nullptr;
     float4* normal = nullptr;

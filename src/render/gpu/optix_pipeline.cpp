@@ -4,6 +4,7 @@
 #include <optix_stack_size.h>
 #include <optix_stubs.h>
 
+#include <algorithm>
 #include <cstring>
 #include <string>
 
@@ -20,6 +21,7 @@ namespace {
 
 struct alignas(OPTIX_SBT_RECORD_ALIGNMENT) Record {
     char header[OPTIX_SBT_RECORD_HEADER_SIZE];
+    HitRecordData data;  // read by hit groups only
 };
 
 // The programs, in the order of the SBT: raygen, the miss records of the ray types, their hit groups.
@@ -29,7 +31,7 @@ std::string log_text(const char* log, size_t size) { return size > 1 ? std::stri
 
 }  // namespace
 
-OptixPrograms::OptixPrograms(OptixDeviceContext ctx) {
+OptixPrograms::OptixPrograms(OptixDeviceContext ctx, const std::vector<uint32_t>& input_meshes) {
     char log[2048];
     size_t log_size = sizeof log;
 
@@ -39,7 +41,7 @@ OptixPrograms::OptixPrograms(OptixDeviceContext ctx) {
     module_options.debugLevel = OPTIX_COMPILE_DEBUG_LEVEL_MINIMAL;
     OptixPipelineCompileOptions pipeline_options{};
     pipeline_options.usesMotionBlur = 0;
-    pipeline_options.traversableGraphFlags = OPTIX_TRAVERSABLE_GRAPH_FLAG_ALLOW_SINGLE_LEVEL_INSTANCING;
+    pipeline_options.traversableGraphFlags = OPTIX_TRAVERSABLE_GRAPH_FLAG_ALLOW_SINGLE_GAS;
     pipeline_options.numPayloadValues = 6;    // t, mesh, primitive, u, v, found
     pipeline_options.numAttributeValues = 2;  // triangle barycentrics
     pipeline_options.exceptionFlags = OPTIX_EXCEPTION_FLAG_NONE;
@@ -81,22 +83,34 @@ OptixPrograms::OptixPrograms(OptixDeviceContext ctx) {
     unsigned dc_traversal = 0, dc_state = 0, continuation = 0;
     optix_check(optixUtilComputeStackSizes(&sizes, 1, 0, 0, &dc_traversal, &dc_state, &continuation),
                 "optixUtilComputeStackSizes");
-    optix_check(optixPipelineSetStackSize(m_pipeline, dc_traversal, dc_state, continuation, 2),
+    // Traversable graph depth 1: a single GAS (optix_accel.h).
+    optix_check(optixPipelineSetStackSize(m_pipeline, dc_traversal, dc_state, continuation, 1),
                 "optixPipelineSetStackSize");
 
-    // The shader binding table: one record per group, in Group order; miss and hit groups per ray type.
-    Record records[g_count];
-    for (int i = 0; i < g_count; ++i)
-        optix_check(optixSbtRecordPackHeader(m_groups[size_t(i)], &records[i]), "optixSbtRecordPackHeader");
-    m_records.upload(reinterpret_cast<const unsigned char*>(records), sizeof records);
+    // The shader binding table: raygen, the miss records in ray-type order, then per build input one hit-group
+    // record per ray type (OptiX picks input * k_ray_types + ray type: the stride and offset optixTrace passes).
+    std::vector<Record> records(3 + k_ray_types * std::max<size_t>(input_meshes.size(), 1));
+    auto pack = [&](Group g, Record& r) {
+        optix_check(optixSbtRecordPackHeader(m_groups[size_t(g)], &r), "optixSbtRecordPackHeader");
+    };
+    pack(g_raygen, records[0]);
+    pack(g_miss_radiance, records[1]);
+    pack(g_miss_shadow, records[2]);
+    for (size_t i = 0; 3 + k_ray_types * i < records.size(); ++i) {
+        Record* hit = &records[3 + k_ray_types * i];
+        pack(g_hit_radiance, hit[k_ray_radiance]);
+        pack(g_hit_shadow, hit[k_ray_shadow]);
+        hit[k_ray_radiance].data.mesh = hit[k_ray_shadow].data.mesh = i < input_meshes.size() ? input_meshes[i] : 0;
+    }
+    m_records.upload(reinterpret_cast<const unsigned char*>(records.data()), records.size() * sizeof(Record));
     const CUdeviceptr base = CUdeviceptr(m_records.data());
-    m_sbt.raygenRecord = base + g_raygen * sizeof(Record);
-    m_sbt.missRecordBase = base + g_miss_radiance * sizeof(Record);
+    m_sbt.raygenRecord = base;
+    m_sbt.missRecordBase = base + sizeof(Record);
     m_sbt.missRecordStrideInBytes = sizeof(Record);
     m_sbt.missRecordCount = k_ray_types;
-    m_sbt.hitgroupRecordBase = base + g_hit_radiance * sizeof(Record);
+    m_sbt.hitgroupRecordBase = base + 3 * sizeof(Record);
     m_sbt.hitgroupRecordStrideInBytes = sizeof(Record);
-    m_sbt.hitgroupRecordCount = k_ray_types;
+    m_sbt.hitgroupRecordCount = unsigned(records.size() - 3);
 }
 
 OptixPrograms::~OptixPrograms() {

@@ -1,10 +1,12 @@
 // The path tracer's OptiX pipeline: the module (the embedded OptiX-IR of device/optix_programs.cu), one program
 // group per program, the linked pipeline with its stack sizes, and the shader binding table built from a small
-// table of (program group, record) pairs: a ray-generation record, a miss and a hit-group record per ray type.
+// table of (program group, record) pairs: a ray-generation record, a miss record per ray type, and a hit-group
+// record per (mesh build input, ray type) that carries the mesh's index (optix_launch.h, HitRecordData).
 #pragma once
 
 #include <optix_types.h>
 
+#include <cstdint>
 #include <vector>
 
 #include "core/cuda/device_buffer.h"
@@ -13,7 +15,8 @@ namespace npt::gpu {
 
 class OptixPrograms {
   public:
-    explicit OptixPrograms(OptixDeviceContext ctx);
+    // input_meshes: the mesh index of each build input of the acceleration structure (optix_accel.h).
+    OptixPrograms(OptixDeviceContext ctx, const std::vector<uint32_t>& input_meshes);
     ~OptixPrograms();
     OptixPrograms(const OptixPrograms&) = delete;
     OptixPrograms& operator=(const OptixPrograms&) = delete;

@@ -60,9 +60,11 @@ struct OptixTracer {
 extern "C" __global__ void __raygen__render() {
     const uint3 idx = optixGetLaunchIndex();
     const int x = int(idx.x), y = int(idx.y);
+    const uint32_t slot = idx.z;
     const OptixTracer tracer;
     Rgb sum(0.0f);
-    for (uint32_t s = params.sample_begin; s < params.sample_begin + params.sample_count; ++s) {
+    const uint32_t end = params.sample_begin + params.sample_count;
+    for (uint32_t s = params.sample_begin + slot; s < end; s += params.slots) {
         // The CPU's sampler for (pixel, sample): the same random numbers, decision by decision.
         SobolSampler sampler(params.seed, uint32_t(x), uint32_t(y), s);
         const Ray ray = render::generate_camera_ray(params.scene.camera, x, y, sampler.next_2d());
@@ -73,10 +75,10 @@ extern "C" __global__ void __raygen__render() {
             atomicAdd(params.dropped, 1ull);
     }
     const size_t pixel = size_t(y) * size_t(params.width) + size_t(x);
-    float4& a = params.accum[pixel];
+    float4& a = params.accum[size_t(slot) * size_t(params.width) * size_t(params.height) + pixel];
     a = make_float4(a.x + sum.x, a.y + sum.y, a.z + sum.z, 0.0f);
 
-    if (params.albedo && params.sample_begin == 0) {
+    if (params.albedo && params.sample_begin == 0 && slot == 0) {
         // Guides for the denoiser: what the pixel's centre sees first.
         const render::CameraView& cam = params.scene.camera;
         const Ray ray = render::generate_camera_ray(cam, x, y, Vec2(0.5f, 0.5f));
@@ -97,7 +99,8 @@ extern "C" __global__ void __raygen__render() {
 extern "C" __global__ void __closesthit__radiance() {
     const float2 b = optixGetTriangleBarycentrics();
     optixSetPayload_0(__float_as_uint(optixGetRayTmax()));
-    optixSetPayload_1(optixGetInstanceId());  // the mesh: one instance per mesh, instance id = mesh index
+    // The mesh: the hit group's record names it (one build input per mesh, optix_accel.h).
+    optixSetPayload_1(reinterpret_cast<const gpu::HitRecordData*>(optixGetSbtDataPointer())->mesh);
     optixSetPayload_2(optixGetPrimitiveIndex());
     optixSetPayload_3(__float_as_uint(b.x));  // OptiX's (b1, b2) weigh vertices 1 and 2, as Embree's (u, v)
     optixSetPayload_4(__float_as_uint(b.y));
