@@ -5,6 +5,7 @@
 #include <optix_stubs.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -36,7 +37,11 @@ OptixPrograms::OptixPrograms(OptixDeviceContext ctx, const std::vector<uint32_t>
     size_t log_size = sizeof log;
 
     OptixModuleCompileOptions module_options{};
-    module_options.maxRegisterCount = OPTIX_COMPILE_DEFAULT_MAX_REGISTER_COUNT;
+    // NERFPT_OPTIX_MAX_REGISTERS (a benchmark knob, docs/benchmarks.md): fewer registers per thread, more warps
+    // resident to hide latency, at the price of spills.
+    const char* max_registers = std::getenv("NERFPT_OPTIX_MAX_REGISTERS");
+    module_options.maxRegisterCount =
+        max_registers ? std::atoi(max_registers) : int(OPTIX_COMPILE_DEFAULT_MAX_REGISTER_COUNT);
     module_options.optLevel = OPTIX_COMPILE_OPTIMIZATION_DEFAULT;
     module_options.debugLevel = OPTIX_COMPILE_DEBUG_LEVEL_MINIMAL;
     OptixPipelineCompileOptions pipeline_options{};
