@@ -4,11 +4,12 @@
 # tests; render_bench on the Cornell scenes; a lego model trained for 60 s and baked at 256^3 for the
 # model-in-scene demo (frames/s at 1920x1080, 1 spp), a NeRF-only view beside `nerfpt view`, the direct-vs-baked
 # error at equal time; then Nsight Compute on one launch of each. Logs in $OUT. Usage: gpu_optix_cycle.sh [--no-ncu]
+# (GTEST_FILTER='*' runs every GPU test, not only the OptiX and shared-maths ones).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_out}
 mkdir -p "$out"
-timeout 400 scripts/gpu_check.sh run --gtest_filter='OptixRender.*:SharedMathGpu.*' >"$out/optix_tests.log" 2>&1
+timeout 400 scripts/gpu_check.sh run --gtest_filter="${GTEST_FILTER:-OptixRender.*:SharedMathGpu.*}" >"$out/optix_tests.log" 2>&1
 grep -E "OptiX|relMSE|seed|PASSED|FAILED|SKIPPED|Failure|error" "$out/optix_tests.log" | head -40
 export LD_LIBRARY_PATH=/tmp/nerfpt-gpu/lib NERFPT_SHARED_DATA=$PWD/.gpu
 bin=/tmp/nerfpt-gpu/bin

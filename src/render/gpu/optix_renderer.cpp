@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <string>
 
 #include "core/cuda/device_buffer.h"
 #include "core/error.h"
@@ -36,9 +38,17 @@ struct StreamOwner {
 };
 }  // namespace
 
+// Grids through hardware-filtered textures with NERFPT_OPTIX_GRID_TEXTURES=1 (a benchmark knob until measured
+// on a GPU, docs/benchmarks.md); the exact eight-voxel lookup otherwise.
+static bool use_grid_textures() {
+    const char* v = std::getenv("NERFPT_OPTIX_GRID_TEXTURES");
+    return v && std::string(v) == "1";
+}
+
 struct OptixRenderer::State {
     State(const scene::Scene& scene, int w, int h)
-        : width(w), height(h), data(scene, w, h), dev(data.view()), accel(ctx.get(), dev, stream.s),
+        : width(w), height(h), data(scene, w, h), dev(data.view(), use_grid_textures()),
+          accel(ctx.get(), dev, stream.s),
           programs(ctx.get(), accel.input_meshes()) {}
     int width, height;
     render::SceneData data;
