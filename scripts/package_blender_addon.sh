@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Packs the Blender add-on (blender/nerfpt_blender) into a zip that Blender's "Install add-on" takes.
-# Usage: scripts/package_blender_addon.sh [OUT.zip]   (default out/nerfpt_blender.zip)
-# The zip's build_dirs.py names this checkout's build/ folder, so that the add-on finds build/nerfpt when nerfpt
-# is not on PATH (the add-on's preference overrides both).
+# Usage: scripts/package_blender_addon.sh [OUT.zip [BUILD_DIR]]   (defaults out/nerfpt_blender.zip, build)
+# The zip's build_dirs.py names BUILD_DIR (this checkout's build/ folder), so that the add-on finds the nerfpt
+# binary there when it is not on PATH (the add-on's preference overrides both).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 out=${1:-$root/out/nerfpt_blender.zip}
+build=$(realpath -m "${2:-$root/build}")
 mkdir -p "$(dirname "$out")"
 out=$(cd "$(dirname "$out")" && pwd)/$(basename "$out")
 
@@ -13,7 +14,7 @@ stage=$(mktemp -d)
 trap 'rm -rf "$stage"' EXIT
 mkdir "$stage/nerfpt_blender"
 cp "$root"/blender/nerfpt_blender/*.py "$stage/nerfpt_blender/"
-python3 - "$stage/nerfpt_blender/build_dirs.py" "$root/build" <<'PY'
+python3 - "$stage/nerfpt_blender/build_dirs.py" "$build" <<'PY'
 import sys
 path, build = sys.argv[1], sys.argv[2]
 text = open(path).read().replace("BUILD_DIRS = []", "BUILD_DIRS = [%r]" % build)

@@ -14,16 +14,20 @@ bl_info = {
     "category": "Render",
 }
 
-from . import engine, export_scene, import_capture, main_thread, preferences, properties, ui
 
-_modules = (properties, preferences, import_capture, export_scene, engine, ui, main_thread)
+def _modules():
+    # Imported here, not at the top: the modules without bpy (nerfpt_cli, child_process, model_file, gltf_post,
+    # main_thread) can then be imported, and tested, outside Blender.
+    from . import engine, export_scene, import_capture, main_thread, preferences, properties, ui
+
+    return (properties, preferences, import_capture, export_scene, engine, ui, main_thread)
 
 
 def register():
-    for m in _modules:
+    for m in _modules():
         m.register()
 
 
 def unregister():
-    for m in reversed(_modules):
+    for m in reversed(_modules()):
         m.unregister()

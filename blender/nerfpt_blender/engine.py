@@ -78,8 +78,6 @@ class NerfptRenderEngine(bpy.types.RenderEngine):
                     original,
                     view_layer,
                     gltf,
-                    settings.samples,
-                    settings.max_bounces,
                     resolution=(width, height),
                     absolute_paths=True,
                 ),
@@ -88,7 +86,7 @@ class NerfptRenderEngine(bpy.types.RenderEngine):
             if notes is None or self._cancelled():
                 return
             cmd = [binary, "render", gltf, "-o", exr, "--res", f"{width}x{height}"]
-            cmd += ["--spp", str(settings.samples), "--max-depth", str(settings.max_bounces)]
+            cmd += ["--spp", str(settings.samples), "--max-depth", str(export_scene.max_depth(scene))]
             cmd += ["--seed", str(settings.seed), "--camera", camera.name, "--threads", str(_threads(scene))]
 
             def on_line(child, stream, line):

@@ -255,9 +255,16 @@ def _notes_text(notes):
     return seen
 
 
-def export(scene, view_layer, filepath, spp, max_depth, resolution=None, absolute_paths=False):
-    """Writes filepath (.gltf + .bin + textures beside it). Returns the list of warnings. Raises NerfptError.
-    Must run on the main thread (the exporter is an operator)."""
+def max_depth(scene):
+    """nerfpt's --max-depth counts scattering events, so direct light alone is depth 1; Blender's (Cycles')
+    "max bounces" counts bounces after the first hit, direct light alone being 0."""
+    return scene.nerfpt.max_bounces + 1
+
+
+def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
+    """Writes filepath (.gltf + .bin + textures beside it) with the scene's nerfpt render settings as scene
+    extras. Returns the list of warnings. Raises NerfptError. Must run on the main thread (the exporter is an
+    operator)."""
     gltf_dir = os.path.dirname(os.path.abspath(filepath))
     notes = []
     camera = scene.camera
@@ -322,8 +329,8 @@ def export(scene, view_layer, filepath, spp, max_depth, resolution=None, absolut
         gltf,
         width=max(1, width),
         height=max(1, height),
-        spp=spp,
-        max_depth=max_depth,
+        spp=scene.nerfpt.samples,
+        max_depth=max_depth(scene),
         background=_world_background(scene.world, notes),
     )
     tmp = filepath + ".tmp"
@@ -352,9 +359,8 @@ class NERFPT_OT_export_scene(bpy.types.Operator):
 
     def execute(self, context):
         path = bpy.path.ensure_ext(bpy.path.abspath(self.filepath), ".gltf")
-        s = context.scene.nerfpt
         try:
-            notes = export(context.scene, context.view_layer, path, s.samples, s.max_bounces)
+            notes = export(context.scene, context.view_layer, path)
         except NerfptError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}

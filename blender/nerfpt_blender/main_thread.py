@@ -17,7 +17,8 @@ class _Task:
     def __init__(self, fn):
         self.fn = fn
         self.done = threading.Event()
-        self.abandoned = False
+        self.lock = threading.Lock()
+        self.state = "queued"  # -> "running" (the main thread took it) or "abandoned" (the caller gave up)
         self.result = None
         self.error = None
 
@@ -33,9 +34,10 @@ def drain():
             task = _tasks.get_nowait()
         except queue.Empty:
             return
-        if task.abandoned:
-            task.done.set()
-            continue
+        with task.lock:
+            if task.state == "abandoned":
+                continue
+            task.state = "running"
         try:
             task.result = task.fn()
         except BaseException as e:  # handed to the waiting thread, which raises it there
@@ -56,9 +58,12 @@ def call(fn, should_cancel=lambda: False, poll_s=0.05):
     task = _Task(fn)
     _tasks.put(task)
     while not task.done.wait(poll_s):
-        if should_cancel() and not task.done.is_set():
-            task.abandoned = True  # skipped if not started yet; if running, waited for below
-            task.done.wait()
+        if should_cancel():
+            with task.lock:
+                if task.state == "queued":
+                    task.state = "abandoned"  # the main thread will skip it
+                    return None
+            task.done.wait()  # already running: it finishes (an export takes seconds at most)
             break
     if task.error is not None:
         raise task.error

@@ -109,10 +109,11 @@ class NerfptRenderSettings(bpy.types.PropertyGroup):
     )
     max_bounces: IntProperty(
         name="Max bounces",
-        description="Longest path in bounces (--max-depth); 0 shows emitters only",
+        description="Bounces after the first hit, as in Cycles: 0 is direct light only (nerfpt's --max-depth "
+        "is this plus 1)",
         default=16,
         min=0,
-        max=1024,
+        max=1023,
     )
     seed: IntProperty(
         name="Seed", description="Random seed (--seed): same seed, same image", default=0, min=0

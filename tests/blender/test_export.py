@@ -1,0 +1,168 @@
+"""Export round trip: a Blender scene with a mesh, a point light, a camera and an imported capture exports
+(File > Export > nerfpt scene) to a glTF that `nerfpt info` reads back with the volume, the camera and the light
+where Blender has them, the capture's extras pointing at its model (or its grid), the render settings as scene
+extras and materials mapped as docs/blender.md says. Then render errors: nerfpt's own error (a model file that
+went missing) reaches Blender as one readable line, not a traceback.
+
+blender -b --factory-startup --python tests/blender/test_export.py -- --build BUILD --name export
+"""
+
+import json
+import math
+import os
+import re
+import sys
+
+import bpy
+from mathutils import Euler, Vector
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import harness as h  # noqa: E402
+
+a = h.args()
+bpy.ops.wm.read_factory_settings(use_empty=True)
+h.enable_addon(nerfpt=a.nerfpt)
+model = h.copy_model(a)
+sc = bpy.context.scene
+
+obj = h.import_model(model, resolution=24)
+obj.location = (0.4, -0.2, 0.7)
+obj.rotation_euler = (0.0, 0.0, math.radians(30))
+obj.scale = (0.5, 0.5, 0.5)
+obj.nerfpt_volume.density_scale = 2.0
+obj.nerfpt_volume.emission_scale = 1.5
+
+# A mesh (a floor with a Diffuse BSDF), a point light and a camera.
+floor = bpy.data.meshes.new("floor")
+floor.from_pydata([(-2, -2, 0), (2, -2, 0), (2, 2, 0), (-2, 2, 0)], [], [(0, 1, 2, 3)])
+mat = bpy.data.materials.new("floor_diffuse")
+mat.use_nodes = True
+bsdf = mat.node_tree.nodes.new("ShaderNodeBsdfDiffuse")
+bsdf.inputs["Color"].default_value = (0.2, 0.4, 0.6, 1.0)
+mat.node_tree.links.new(bsdf.outputs[0], mat.node_tree.nodes["Material Output"].inputs["Surface"])
+floor.materials.append(mat)
+sc.collection.objects.link(bpy.data.objects.new("floor", floor))
+light = bpy.data.lights.new("lamp", "POINT")
+light.energy = 100.0
+light.shadow_soft_size = 0.0
+lo = bpy.data.objects.new("lamp", light)
+sc.collection.objects.link(lo)
+lo.location = (1.0, -1.5, 2.5)
+cam = bpy.data.cameras.new("camera")
+cam.sensor_fit = "VERTICAL"
+cam.angle_y = math.radians(35)
+co = bpy.data.objects.new("camera", cam)
+sc.collection.objects.link(co)
+co.location = (3.0, -4.0, 1.5)
+co.rotation_euler = Euler((math.radians(80), 0.0, math.radians(35)))
+sc.camera = co
+sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage = 160, 120, 50
+sc.nerfpt.samples = 16
+sc.nerfpt.max_bounces = 3
+sc.world = bpy.data.worlds.new("grey")
+sc.world.use_nodes = True
+sc.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.1, 0.2, 0.3, 1.0)
+sc.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 2.0
+area = bpy.data.objects.new("softbox", bpy.data.lights.new("softbox", "AREA"))
+sc.collection.objects.link(area)
+
+gltf_path = os.path.join(a.work, "scene.gltf")
+result = bpy.ops.export_scene.nerfpt_gltf(filepath=gltf_path)
+h.check(result == {"FINISHED"}, f"export returned {result}")
+info = h.nerfpt(a, "info", gltf_path).stdout
+h.log("nerfpt info scene.gltf:\n" + info.rstrip())
+
+
+def y_up(v):
+    return Vector((v[0], v[2], -v[1]))
+
+
+def vec(text):
+    return Vector(float(x) for x in text.strip("()").split(","))
+
+
+def near(p, q, tol):
+    return (p - q).length <= tol
+
+
+# Camera: position and forward (nerfpt prints 3 significant digits).
+m = re.search(
+    r"^camera\s+'camera'.* at (\([^)]*\)), forward (\([^)]*\)), up (\([^)]*\)), yfov ([\d.]+) deg", info, re.M
+)
+h.check(m, "no camera 'camera' in nerfpt info")
+fwd = co.matrix_world.to_3x3() @ Vector((0, 0, -1))
+h.check(
+    near(vec(m.group(1)), y_up(co.location), 0.01),
+    f"camera at {m.group(1)}, Blender {tuple(y_up(co.location))}",
+)
+h.check(near(vec(m.group(2)), y_up(fwd), 0.01), f"camera forward {m.group(2)}, Blender {tuple(y_up(fwd))}")
+h.check(abs(float(m.group(4)) - 35.0) < 0.1, f"yfov {m.group(4)}")
+# The point light, in W/(4 pi sr) as Cycles' point lights.
+m = re.search(r"^\s+point\s+'lamp' at (\([^)]*\)), intensity (\([^)]*\))", info, re.M)
+h.check(m, "no point light 'lamp' in nerfpt info")
+h.check(near(vec(m.group(1)), y_up(lo.location), 0.01), f"light at {m.group(1)}")
+h.check(near(vec(m.group(2)), Vector((100 / (4 * math.pi),) * 3), 0.01), f"intensity {m.group(2)}")
+# The volume: world bounds = the cube's 8 corners through the object's transform, extras as set.
+m = re.search(r"^\s+'spheres' world bounds (\([^)]*\)) \.\. (\([^)]*\)), translation (\([^)]*\))", info, re.M)
+h.check(m, "no volume 'spheres' in nerfpt info")
+corners = [
+    y_up(obj.matrix_world @ Vector(c)) for c in [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+]
+lo_b = Vector(min(c[i] for c in corners) for i in range(3))
+hi_b = Vector(max(c[i] for c in corners) for i in range(3))
+h.check(
+    near(vec(m.group(1)), lo_b, 0.01) and near(vec(m.group(2)), hi_b, 0.01),
+    f"bounds {m.group(1)} .. {m.group(2)}",
+)
+h.check(near(vec(m.group(3)), y_up(obj.location), 0.01), f"translation {m.group(3)}")
+extras = json.loads(re.search(r"^\s+extras (\{.*\})$", info, re.M).group(1))["volume"]
+h.check(extras["file"] == "spheres.npt", f"extras file {extras['file']} (relative to the glTF)")
+h.check(extras["density_scale"] == 2.0 and extras["emission_scale"] == 1.5, f"extras {extras}")
+h.check(
+    re.search(r"^materials .*\n(.*\n)*\s+floor_diffuse\s+diffuse\s+base \(0\.2, 0\.4, 0\.6\)", info, re.M),
+    "floor material",
+)
+h.check(
+    "specular 0" in info.split("floor_diffuse")[1].splitlines()[0],
+    "the Diffuse BSDF must have no specular layer",
+)
+h.check(re.search(r"^render\s+80x60, 16 spp, max depth 4\b", info, re.M), "render settings")
+h.check(re.search(r"^\s+environment constant \(0\.2, 0\.4, 0\.6\)", info, re.M), "world colour x strength")
+
+# The grid instead of the model: its density is per local unit, the export makes it per world unit.
+obj.nerfpt_volume.source = "GRID"
+bpy.ops.export_scene.nerfpt_gltf(filepath=gltf_path)
+g = json.load(open(gltf_path))
+node = next(n for n in g["nodes"] if n.get("name") == "spheres" and "mesh" in n)
+v = node["extras"]["volume"]
+h.check(v["file"] == "spheres.bake24.vdb", f"grid file {v['file']}")
+h.check(abs(v["density_scale"] - 2.0 / (0.5 * 0.5 / 0.33)) < 1e-4, f"grid density_scale {v['density_scale']}")
+h.nerfpt(a, "info", gltf_path)
+
+# A render error: the model went missing. One line in Blender, naming the file.
+obj.nerfpt_volume.source = "MODEL"
+os.rename(model, model + ".away")
+sc.render.engine = "NERFPT"
+try:
+    bpy.ops.render.render(write_still=False)
+    raise AssertionError("the render of a scene whose model is missing did not fail")
+except RuntimeError as e:
+    msg = str(e).strip()
+h.log(f"render error: {msg}")
+h.check("spheres.npt" in msg and "not found" in msg, f"unexpected message: {msg}")
+h.check(len(msg.splitlines()) == 1 and "Traceback" not in msg, f"not one line: {msg!r}")
+os.rename(model + ".away", model)
+
+# nerfpt's own error: a corrupt model file.
+with open(model, "r+b") as f:
+    f.seek(200)
+    f.write(b"\xff" * 64)
+try:
+    bpy.ops.render.render(write_still=False)
+    raise AssertionError("the render of a corrupt model did not fail")
+except RuntimeError as e:
+    msg = str(e).strip()
+h.log(f"render error: {msg}")
+h.check("nerfpt render failed" in msg and "spheres.npt" in msg, f"unexpected message: {msg}")
+h.check(len(msg.splitlines()) == 1 and "Traceback" not in msg, f"not one line: {msg!r}")
+h.log("export: OK")
