@@ -10,6 +10,7 @@ import math
 import os
 
 import bpy
+from mathutils import Matrix
 
 from . import gltf_post
 from .nerfpt_cli import NerfptError
@@ -306,10 +307,11 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
         if obj.type != "VOLUME" or not obj.nerfpt_volume.is_capture or not renders(obj, view_layer):
             continue
         s = obj.nerfpt_volume
+        cube = obj.matrix_world @ Matrix.Translation(s.voxel_shift)  # volume_material, "Voxel centres"
         cubes.append(
             {
                 "name": obj.name,
-                "matrix": gltf_post.gltf_node_matrix(obj.matrix_world),
+                "matrix": gltf_post.gltf_node_matrix(cube),
                 "min": list(s.cube_min),
                 "max": list(s.cube_max),
                 "extras": _volume_extras(obj, gltf_dir, absolute_paths, notes),

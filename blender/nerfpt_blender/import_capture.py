@@ -66,9 +66,12 @@ def create_capture(
 
     obj = bpy.data.objects.new(name, volume)
     context.collection.objects.link(obj)
-    obj.location = location
+    # The cube at `location` with `scale`; the object half a voxel off it (volume_material, "Voxel centres").
+    h = volume_material.half_voxel(density)
+    obj.location = [location[a] - scale[a] * h[a] for a in range(3)]
     obj.scale = scale
     s = obj.nerfpt_volume
+    s.voxel_shift = h
     s.is_capture = True
     s.model_path = model_path
     s.source = "MODEL" if model_path else "GRID"
@@ -77,12 +80,12 @@ def create_capture(
     if not model_path:
         # The cube nerfpt clips the field to: the grid's bounds (voxel centres) plus one voxel of trilinear
         # support. A .npt's cube is [-1, 1]^3 by definition (the bake fills exactly that).
+        # Object bounds are in the object's space: the cube's local space is that minus h.
         m = density.matrix_object
         pad = [abs(m[r][0]) + abs(m[r][1]) + abs(m[r][2]) for r in range(3)]
         corners = [c[:] for c in obj.bound_box]
-        s.cube_min = [min(c[a] for c in corners) - pad[a] for a in range(3)]
-        s.cube_max = [max(c[a] for c in corners) + pad[a] for a in range(3)]
-    volume_material.add_voxel_shift(obj, volume_material.half_voxel_shift(density))
+        s.cube_min = [min(c[a] for c in corners) - h[a] - pad[a] for a in range(3)]
+        s.cube_max = [max(c[a] for c in corners) - h[a] + pad[a] for a in range(3)]
 
     for o in context.view_layer.objects:
         o.select_set(False)

@@ -93,6 +93,13 @@ class NerfptVolumeSettings(bpy.types.PropertyGroup):
     )
     crop_min: FloatVectorProperty(name="Crop min", size=3, default=(0.0, 0.0, 0.0), description="Model space")
     crop_max: FloatVectorProperty(name="Crop max", size=3, default=(1.0, 1.0, 1.0), description="Model space")
+    voxel_shift: FloatVectorProperty(
+        name="Voxel shift",
+        size=3,
+        default=(0.0, 0.0, 0.0),
+        description="Half a voxel (local space): the nerfpt cube is the object's transform moved by this "
+        "(Cycles centres voxels half a voxel off OpenVDB's convention)",
+    )
     cube_min: FloatVectorProperty(
         name="Cube min", size=3, default=(-1.0, -1.0, -1.0), description="The nerfpt volume cube, local space"
     )

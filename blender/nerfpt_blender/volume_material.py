@@ -15,15 +15,17 @@ scaling the object, even unevenly, keeps the object's opacity exactly. With "Den
 factor is 1 (sigma per world unit, as nerfpt reads other OpenVDB files).
 
 Voxel centres. Cycles (measured in 3.4.1, ../shared/data/scenes/README.md, test B) samples a VDB grid as if voxel
-i were centred at index i + 1/2, OpenVDB (and nerfpt) at i. A geometry-nodes Transform moves the grids by -1/2
-voxel in the object's local space, so the object's own transform stays the nerfpt cube's transform.
+i were centred at index i + 1/2, OpenVDB (and nerfpt) at i. As in ../shared/data/scenes/cycles_reference.py, the
+object's transform is the nerfpt cube's followed by a shift of -1/2 voxel in local space (h below, kept in the
+object's settings): matrix_world = cube @ T(-h), so the export writes cube = matrix_world @ T(h), whatever the
+user does to the object later. (A geometry-nodes Transform of the grids would keep the object's transform clean,
+but in Blender 3.4 it moves the original grids too, again at every evaluation.)
 """
 
 import bpy
 
 MATERIAL_NAME = "nerfpt volume"
 MATERIAL_NAME_WHITE = "nerfpt volume (no colour grid)"
-SHIFT_MODIFIER = "nerfpt voxel centres"
 PROP = "nerfpt_volume"
 
 
@@ -125,35 +127,10 @@ def volume_material(white=False):
     return mat
 
 
-def _geometry_sockets(group):
-    if hasattr(group, "interface"):  # Blender 4.0+
-        group.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
-        group.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
-    else:
-        group.inputs.new("NodeSocketGeometry", "Geometry")
-        group.outputs.new("NodeSocketGeometry", "Geometry")
-
-
-def add_voxel_shift(obj, shift):
-    """A geometry-nodes modifier moving obj's grids by `shift` (local space): -1/2 voxel, see the top."""
-    group = bpy.data.node_groups.new(SHIFT_MODIFIER, "GeometryNodeTree")
-    _geometry_sockets(group)
-    gin = group.nodes.new("NodeGroupInput")
-    gout = group.nodes.new("NodeGroupOutput")
-    move = group.nodes.new("GeometryNodeTransform")
-    move.inputs["Translation"].default_value = shift
-    gin.location, move.location, gout.location = (-300, 0), (0, 0), (300, 0)
-    group.links.new(gin.outputs[0], move.inputs["Geometry"])
-    group.links.new(move.outputs["Geometry"], gout.inputs[0])
-    mod = obj.modifiers.new(SHIFT_MODIFIER, "NODES")
-    mod.node_group = group
-    return mod
-
-
-def half_voxel_shift(grid):
-    """-1/2 of the grid's voxel diagonal in object space (grid.matrix_object maps index to object space)."""
+def half_voxel(grid):
+    """1/2 of the grid's voxel diagonal in the object's local space (grid.matrix_object maps index to local)."""
     m = grid.matrix_object
-    return tuple(-0.5 * (m[r][0] + m[r][1] + m[r][2]) for r in range(3))
+    return tuple(0.5 * (m[r][0] + m[r][1] + m[r][2]) for r in range(3))
 
 
 def setup_volume_data(volume):

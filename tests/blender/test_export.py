@@ -14,7 +14,7 @@ import re
 import sys
 
 import bpy
-from mathutils import Euler, Vector
+from mathutils import Euler, Matrix, Vector
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness as h  # noqa: E402
@@ -114,7 +114,7 @@ h.check(
     near(vec(m.group(1)), lo_b, 0.01) and near(vec(m.group(2)), hi_b, 0.01),
     f"bounds {m.group(1)} .. {m.group(2)}",
 )
-h.check(near(vec(m.group(3)), y_up(obj.location), 0.01), f"translation {m.group(3)}")
+h.check(near(vec(m.group(3)), y_up(cube.translation), 0.01), f"translation {m.group(3)}")
 extras = json.loads(re.search(r"^\s+extras (\{.*\})$", info, re.M).group(1))["volume"]
 h.check(extras["file"] == "spheres.npt", f"extras file {extras['file']} (relative to the glTF)")
 h.check(extras["density_scale"] == 2.0 and extras["emission_scale"] == 1.5, f"extras {extras}")

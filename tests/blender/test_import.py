@@ -10,6 +10,7 @@ import os
 import sys
 
 import bpy
+from mathutils import Matrix
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness as h  # noqa: E402
@@ -41,24 +42,20 @@ h.check(
     not glob.glob(os.path.join(a.work, "*partial*")) and not glob.glob(os.path.join(a.work, "*.tmp*")),
     "leftovers",
 )
-# The sphere data set: scale 0.33, offset 0.5, aabb_scale 1 -> the model's box is world [-0.5/0.33, 0.5/0.33]^3.
-h.check(close(obj.location, (0, 0, 0)), f"location {tuple(obj.location)}")
+# The sphere data set: scale 0.33, offset 0.5, aabb_scale 1 -> the model's box is world [-0.5/0.33, 0.5/0.33]^3,
+# and the cube fills it. The object is the cube moved by -1/2 voxel in local space (Cycles' voxel centres): the
+# grid has 48 voxels over [-1, 1], index -> local scale 2/48, so h = 1/48.
+h.check(close(s.voxel_shift, (1 / 48,) * 3), f"voxel shift {tuple(s.voxel_shift)}")
+cube = obj.matrix_world @ Matrix.Translation(s.voxel_shift)
+h.check(close(cube.translation, (0, 0, 0), 1e-6), f"cube centre {tuple(cube.translation)}")
 h.check(close(obj.scale, (0.5 / 0.33,) * 3), f"scale {tuple(obj.scale)}")
 h.check(close(s.cube_min, (-1, -1, -1)) and close(s.cube_max, (1, 1, 1)), "a model's cube is [-1, 1]^3")
 names = {g.name: g for g in obj.data.grids}
 h.check({"density", "color"} <= set(names), f"grids {list(names)}")
+h.check(abs(names["density"].matrix_object[0][0] - 2 / 48) < 1e-6, "voxel size")
 h.check(obj.data.materials[0].name == volume_material.MATERIAL_NAME, f"material {obj.data.materials[0].name}")
 r = obj.data.render
 h.check(r.space == "WORLD" and r.precision == "FULL" and r.clipping == 0.0, "volume render settings")
-# The -1/2 voxel shift: the baked grid has 48 voxels over [-1, 1] (index -> local: scale 2/48).
-mod = obj.modifiers.get(volume_material.SHIFT_MODIFIER)
-h.check(mod is not None and mod.node_group is not None, "no voxel-centre modifier")
-m0 = names["density"].matrix_object
-dg = bpy.context.evaluated_depsgraph_get()
-m1 = {g.name: g for g in obj.evaluated_get(dg).data.grids}["density"].matrix_object
-for r_ in range(3):
-    h.check(abs(m0[r_][r_] - 2 / 48) < 1e-6, f"voxel size {m0[r_][r_]}")
-    h.check(abs((m1[r_][3] - m0[r_][3]) + 1 / 48) < 1e-6, f"shift {m1[r_][3] - m0[r_][3]}")
 
 # A crop: the box fills the cube, placed where it lies in the training world.
 crop = ((0.3, 0.25, 0.2), (0.7, 0.75, 0.6))
@@ -66,7 +63,8 @@ cropped = h.import_model(model, resolution=24, use_crop=True, crop_min=crop[0], 
 place = model_file.placement(model, crop)
 # Model axes x, y, z are world y, z, x: the world half sizes are (0.2, 0.2, 0.25) / 0.33.
 h.check(close(cropped.scale, (0.2 / 0.33, 0.2 / 0.33, 0.25 / 0.33)), f"crop scale {tuple(cropped.scale)}")
-h.check(close(cropped.location, place["centre"]), f"crop location {tuple(cropped.location)}")
+crop_cube = cropped.matrix_world @ Matrix.Translation(cropped.nerfpt_volume.voxel_shift)
+h.check(close(crop_cube.translation, place["centre"], 1e-6), f"crop centre {tuple(crop_cube.translation)}")
 h.check(
     cropped.nerfpt_volume.use_crop and close(cropped.nerfpt_volume.crop_max, crop[1]), "crop not recorded"
 )
@@ -76,7 +74,10 @@ h.check(len(glob.glob(os.path.join(a.work, "spheres.bake24_crop_*.vdb"))) == 1, 
 vdb = h.import_model(grid)
 t = vdb.nerfpt_volume
 h.check(t.is_capture and t.source == "GRID" and not t.model_path, "a .vdb import renders its grid")
-h.check(close(vdb.location, (0, 0, 0)) and close(vdb.scale, (1, 1, 1)), "a .vdb keeps its coordinates")
+vdb_cube = vdb.matrix_world @ Matrix.Translation(t.voxel_shift)
+h.check(
+    close(vdb_cube.translation, (0, 0, 0)) and close(vdb.scale, (1, 1, 1)), "a .vdb keeps its coordinates"
+)
 h.check(all(t.cube_min[i] < t.cube_max[i] for i in range(3)), f"cube {tuple(t.cube_min)} {tuple(t.cube_max)}")
 h.check(all(-1.2 < t.cube_min[i] and t.cube_max[i] < 1.2 for i in range(3)), "cube beyond the bake's box")
 

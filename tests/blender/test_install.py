@@ -21,6 +21,7 @@ scripts = os.environ.get("BLENDER_USER_SCRIPTS", "")
 h.check(scripts and a.build in os.path.abspath(scripts), "BLENDER_USER_SCRIPTS must lie in the build folder")
 h.check(os.path.isfile(a.zip), f"no add-on zip at {a.zip} (the blender.package fixture makes it)")
 
+shutil.rmtree(os.path.join(scripts, "addons", "nerfpt_blender"), ignore_errors=True)  # a clean install
 result = bpy.ops.preferences.addon_install(filepath=a.zip, overwrite=True)
 h.check(result == {"FINISHED"}, f"addon_install returned {result}")
 h.check(os.path.isfile(os.path.join(scripts, "addons", "nerfpt_blender", "__init__.py")), "not installed")
@@ -54,8 +55,11 @@ def expect_error(configured, *fragments):
     h.check("\n" not in line and "Traceback" not in line, f"not one line: {line!r}")
     for f in fragments:
         h.check(f in line, f"'{f}' not in: {line}")
-    result = bpy.ops.nerfpt.check_binary()
-    h.check(result == {"CANCELLED"}, f"check_binary returned {result}")
+    try:  # the Check button: an ERROR report, which a script sees as RuntimeError
+        bpy.ops.nerfpt.check_binary()
+        raise AssertionError("check_binary accepted it")
+    except RuntimeError as e:
+        h.check(str(e).strip() == "Error: " + line, f"check_binary said {e}")
 
 
 def fake(name, body):

@@ -76,12 +76,11 @@ h.log(
 
 
 def save_exr(px, path):
+    """Linear float EXR (save_render with the scene's EXR settings applies no view transform to float files)."""
     img = bpy.data.images.new(os.path.basename(path), px.shape[1], px.shape[0], alpha=True, float_buffer=True)
     rgba = np.concatenate([px, np.ones(px.shape[:2] + (1,))], axis=2)[::-1]
     img.pixels.foreach_set(rgba.astype(np.float32).ravel())
-    img.filepath_raw = path
-    img.file_format = "OPEN_EXR"
-    img.save()
+    img.save_render(path, scene=bpy.context.scene)  # the scene's image settings: OPEN_EXR, 32 bit (h.render)
     bpy.data.images.remove(img)
 
 
@@ -108,7 +107,7 @@ for k, name in enumerate("RGB"):
 # The default: nerfpt queries the network, Cycles shows the bake.
 obj.nerfpt_volume.source = "MODEL"
 model_path = os.path.join(a.work, "nerfpt_model.exr")
-t_model = h.render(model_path, "NERFPT", a.spp, 3)
+t_model = h.render(model_path, "NERFPT", half, 3)
 printed = h.nerfpt(a, "compare", model_path, r_path).stdout
 model_rel = float(printed.split()[1])
 h.log(
