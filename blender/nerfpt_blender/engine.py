@@ -102,7 +102,8 @@ class NerfptRenderEngine(bpy.types.RenderEngine):
             if child.cancelled:
                 return
             if child.returncode != 0:
-                raise NerfptError("nerfpt render failed: " + child.failure())
+                # The temporary glTF's path means nothing to the user: it is "the scene".
+                raise NerfptError("nerfpt render failed: " + child.failure().replace(gltf + ": ", "scene: "))
             if not os.path.isfile(exr):
                 raise NerfptError(f"nerfpt render wrote no image ({exr})")
             result = self.begin_result(0, 0, width, height)

@@ -167,7 +167,7 @@ def _scale_factors(matrix):
     return [math.sqrt(sum(matrix[r][c] ** 2 for r in range(3))) for c in range(3)]
 
 
-def _volume_extras(obj, gltf_dir, absolute_paths, notes):
+def _volume_extras(obj, world, gltf_dir, absolute_paths, notes):
     s = obj.nerfpt_volume
     grid = os.path.abspath(bpy.path.abspath(obj.data.filepath))
     model = os.path.abspath(bpy.path.abspath(s.model_path)) if s.model_path else ""
@@ -183,7 +183,7 @@ def _volume_extras(obj, gltf_dir, absolute_paths, notes):
         except ValueError:  # another drive
             pass
     density_scale = s.density_scale
-    scales = _scale_factors(obj.matrix_world)
+    scales = _scale_factors(world)
     if not use_model and s.local_density:
         # nerfpt reads a grid's density per world unit; the grid holds it per local unit.
         mean = (scales[0] * scales[1] * scales[2]) ** (1.0 / 3.0)
@@ -277,6 +277,8 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
     try:
         with bpy.context.temp_override(**override):
             result = bpy.ops.export_scene.gltf(**_exporter_options(filepath))
+            # Final transforms (constraints, parents, drivers), as the exporter saw them.
+            depsgraph = bpy.context.evaluated_depsgraph_get()
     except (RuntimeError, TypeError) as e:
         last = [ln for ln in str(e).strip().splitlines() if ln.strip()]
         raise NerfptError(
@@ -307,14 +309,15 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
         if obj.type != "VOLUME" or not obj.nerfpt_volume.is_capture or not renders(obj, view_layer):
             continue
         s = obj.nerfpt_volume
-        cube = obj.matrix_world @ Matrix.Translation(s.voxel_shift)  # volume_material, "Voxel centres"
+        world = obj.evaluated_get(depsgraph).matrix_world
+        cube = world @ Matrix.Translation(s.voxel_shift)  # volume_material, "Voxel centres"
         cubes.append(
             {
                 "name": obj.name,
                 "matrix": gltf_post.gltf_node_matrix(cube),
                 "min": list(s.cube_min),
                 "max": list(s.cube_max),
-                "extras": _volume_extras(obj, gltf_dir, absolute_paths, notes),
+                "extras": _volume_extras(obj, world, gltf_dir, absolute_paths, notes),
             }
         )
     data = gltf_post.add_volume_cubes(gltf, cubes, CUBE_BIN)
