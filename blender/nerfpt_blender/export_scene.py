@@ -301,6 +301,8 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
             mat_notes.append("a material named 'volume' makes nerfpt treat its meshes as volume cubes")
         if mapped is not None:
             gltf_post.replace_material(gltf, i, mapped)
+        else:
+            gltf_post.no_specular_when_black(m)
         notes += [f"material '{mat.name}': {n}" for n in mat_notes]
 
     # The captures' volume cubes.

@@ -154,6 +154,14 @@ def replace_material(gltf, index, material):
         use_extension(gltf, ext)
 
 
+def no_specular_when_black(material):
+    """Principled Specular 0 comes out of Blender's exporter as specularColorFactor 0 (F0 = 0), which still
+    leaves Schlick's grazing term (1 - cos)^5; specularFactor 0 removes the layer, as Blender does."""
+    spec = material.get("extensions", {}).get("KHR_materials_specular")
+    if spec is not None and spec.get("specularColorFactor") == [0.0, 0.0, 0.0]:
+        spec["specularFactor"] = 0.0
+
+
 def lambert(color):
     """Exactly albedo/pi in nerfpt: no metal, no specular layer (Cycles' Diffuse BSDF with roughness 0)."""
     return {

@@ -148,11 +148,13 @@ def build_room(width, height):
     return co
 
 
-def place_capture(obj):
-    """The imported sphere model (spheres within radius 1 of its origin, the lowest point at z = -0.45) at half
-    its training size, standing on the floor."""
-    obj.location = (0.0, 0.1, 0.23)
-    obj.scale = [0.5 * s for s in obj.scale]
+def place_capture(obj, x=0.0, y=0.1, z=0.23, size=0.5, yaw_deg=0.0):
+    """The imported model at `size` times its training size, turned by yaw_deg about +Z, moved to (x, y, z).
+    The defaults stand the sphere model (spheres within radius 1 of its origin, the lowest point at z = -0.45)
+    on the floor."""
+    obj.location = (x, y, z)
+    obj.rotation_euler = (0.0, 0.0, yaw_deg * 3.141592653589793 / 180.0)
+    obj.scale = [size * s for s in obj.scale]
 
 
 def cycles_settings(bounces):

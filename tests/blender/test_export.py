@@ -37,6 +37,52 @@ floor = bpy.data.meshes.new("floor")
 floor.from_pydata([(-2, -2, 0), (2, -2, 0), (2, 2, 0), (-2, 2, 0)], [], [(0, 1, 2, 3)])
 floor.materials.append(h._material("floor_diffuse", (0.2, 0.4, 0.6)))
 sc.collection.objects.link(bpy.data.objects.new("floor", floor))
+
+
+def wall(name, make_material):
+    """A quad whose material make_material(node_tree, output) builds (the mapping table of docs/blender.md)."""
+    me = bpy.data.meshes.new(name)
+    me.from_pydata([(-2, 2, 0), (2, 2, 0), (2, 2, 2), (-2, 2, 2)], [], [(0, 1, 2, 3)])
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    mat.node_tree.nodes.clear()
+    out = mat.node_tree.nodes.new("ShaderNodeOutputMaterial")
+    node = make_material(mat.node_tree)
+    mat.node_tree.links.new(node.outputs[0], out.inputs["Surface"])
+    me.materials.append(mat)
+    sc.collection.objects.link(bpy.data.objects.new(name, me))
+
+
+def principled(nt):
+    n = nt.nodes.new("ShaderNodeBsdfPrincipled")
+    n.inputs["Base Color"].default_value = (0.5, 0.5, 0.5, 1)
+    n.inputs["Roughness"].default_value = 0.7
+    n.inputs[next(k for k in ("Specular", "Specular IOR Level") if k in n.inputs)].default_value = 0.0
+    return n
+
+
+def glossy(nt):
+    n = nt.nodes.new("ShaderNodeBsdfGlossy")
+    n.inputs["Color"].default_value = (0.9, 0.6, 0.2, 1)
+    n.inputs["Roughness"].default_value = 0.3
+    return n
+
+
+def emission(nt):
+    n = nt.nodes.new("ShaderNodeEmission")
+    n.inputs["Color"].default_value = (1.0, 0.5, 0.25, 1)
+    n.inputs["Strength"].default_value = 4.0
+    return n
+
+
+def glass(nt):
+    n = nt.nodes.new("ShaderNodeBsdfGlass")
+    n.inputs["IOR"].default_value = 1.33
+    return n
+
+
+for name, make in (("principled", principled), ("glossy", glossy), ("emission", emission), ("glass", glass)):
+    wall(name, make)
 light = bpy.data.lights.new("lamp", "POINT")
 light.energy = 100.0
 light.shadow_soft_size = 0.0
@@ -115,6 +161,19 @@ h.check(extras["density_scale"] == 2.0 and extras["emission_scale"] == 1.5, f"ex
 # The Diffuse BSDF as Lambert: no metal, no specular layer (docs/blender.md).
 lambert = r"^\s+floor_diffuse\s+diffuse\s+base \(0\.2, 0\.4, 0\.6\), roughness 1, specular 0, double-sided$"
 h.check(re.search(lambert, info, re.M), "the floor's Diffuse BSDF is not exported as Lambert")
+for name, line in (
+    (
+        "principled",
+        r"diffuse\s+base \(0\.5, 0\.5, 0\.5\), roughness 0\.7, specular 0\b",
+    ),  # Specular 0: no layer
+    ("glossy", r"metal\s+base \(0\.9, 0\.6, 0\.2\), roughness 0\.3, metallic 1\b"),
+    ("emission", r"emissive emission \(4, 2, 1\), base \(0, 0, 0\)"),
+    ("glass", r"glass\s+transmission 1, ior 1\.33\b"),
+):
+    h.check(
+        re.search(r"^\s+" + name + r"\s+" + line, info, re.M),
+        f"material '{name}' not mapped as docs/blender.md says",
+    )
 h.check(re.search(r"^render\s+80x60, 16 spp, max depth 4\b", info, re.M), "render settings")
 h.check(re.search(r"^\s+environment constant \(0\.2, 0\.4, 0\.6\)", info, re.M), "world colour x strength")
 

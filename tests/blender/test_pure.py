@@ -252,6 +252,12 @@ class Gltf(unittest.TestCase):
         e = gltf_post.emitter([2.0, 1.0, 0.0], 5.0)
         self.assertEqual(e["emissiveFactor"], [1.0, 0.5, 0.0])
         self.assertEqual(e["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"], 10.0)
+        principled = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [0.0, 0.0, 0.0]}}}
+        gltf_post.no_specular_when_black(principled)
+        self.assertEqual(principled["extensions"]["KHR_materials_specular"]["specularFactor"], 0.0)
+        tinted = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [1.2, 1.2, 1.2]}}}
+        gltf_post.no_specular_when_black(tinted)
+        self.assertNotIn("specularFactor", tinted["extensions"]["KHR_materials_specular"])
         gltf_post.set_scene_extras(g, width=8, spp=4)
         self.assertEqual(g["scenes"][0]["extras"], {"width": 8, "spp": 4})
 

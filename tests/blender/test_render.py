@@ -16,7 +16,9 @@ Also rendered, not compared within noise: nerfpt querying the model itself (the 
 the 48-voxel bake by the bake's resolution; its relative MSE against Cycles is printed and bounded loosely.
 
 blender -b --factory-startup --python tests/blender/test_render.py -- --build BUILD --name render
-    [--res 80x60] [--spp 64] [--model M.npt] [--images DIR]   (--images: the PNGs for the README)
+    [--res 80x60] [--spp 64] [--bake-res 48] [--model-path M.npt] [--placement X,Y,Z,SIZE,YAW] [--images DIR]
+    The README's images: --model-path out/lego.npt --res 240x180 --spp 64 --bake-res 128
+    --placement 0,0.1,0.18,0.5,0 --images docs/images (lego trained for 4 minutes on the CPU).
 """
 
 import os
@@ -38,6 +40,7 @@ a = h.args(
         ("--bake-res", dict(type=int, default=48)),
         ("--model-path", dict(default=None, help="another model instead of the trained spheres")),
         ("--images", dict(default=None, help="copy the Cycles and nerfpt PNGs here")),
+        ("--placement", dict(default="0,0.1,0.23,0.5,0", help="x,y,z,size,yaw_deg (harness.place_capture)")),
     ]
 )
 t_start = time.time()
@@ -46,7 +49,7 @@ bpy.ops.wm.read_factory_settings(use_empty=True)
 h.enable_addon(nerfpt=a.nerfpt)
 model = h.copy_model(a) if not a.model_path else a.model_path
 obj = h.import_model(model, resolution=a.bake_res, source="GRID")
-h.place_capture(obj)
+h.place_capture(obj, *(float(v) for v in a.placement.split(",")))
 h.build_room(width, height)
 h.cycles_settings(a.bounces)
 h.log(f"scene ready: {width}x{height}, capture '{obj.name}' scale {obj.scale[0]:.3f}")
@@ -111,10 +114,12 @@ t_model = h.render(model_path, "NERFPT", half, 3)
 printed = h.nerfpt(a, "compare", model_path, r_path).stdout
 model_rel = float(printed.split()[1])
 h.log(
-    f"model queried directly, {a.spp} spp: {t_model:.1f} s, relMSE against Cycles {model_rel:.4g} (noise {noise:.4g})"
+    f"model queried directly, {half} spp: {t_model:.1f} s, relMSE against Cycles {model_rel:.4g} (noise {noise:.4g})"
 )
-if not a.model_path and model_rel > 0.05:
-    failures.append(f"the model's render is far from the bake's: relMSE {model_rel:.3g} > 0.05")
+# Not within the noise: the bake's resolution differs. Measured 0.0030 at 80x60 and 32 spp (noise alone ~0.0022
+# here, more for a half-spp render); 0.01 catches a model placed, turned or scaled unlike its bake.
+if not a.model_path and model_rel > 0.01:
+    failures.append(f"the model's render is far from its bake's: relMSE {model_rel:.3g} > 0.01")
 
 for name, px in (("cycles", r), ("nerfpt", h.read_exr(model_path)), ("nerfpt_grid", m)):
     h.save_png(px, os.path.join(a.work, f"blender_{name}.png"))
