@@ -17,8 +17,8 @@ the 48-voxel bake by the bake's resolution; its relative MSE against Cycles is p
 
 blender -b --factory-startup --python tests/blender/test_render.py -- --build BUILD --name render
     [--res 80x60] [--spp 64] [--bake-res 48] [--model-path M.npt] [--placement X,Y,Z,SIZE,YAW] [--images DIR]
-    The README's images: --model-path out/lego.npt --res 240x180 --spp 64 --bake-res 128
-    --placement 0,0.1,0.18,0.5,0 --images docs/images (lego trained for 4 minutes on the CPU).
+    The README's images (lego trained 4 min on the CPU: nerfpt train lego -o out/lego.npt --downscale 2 --time 240):
+    --model-path out/lego.npt --res 240x180 --spp 128 --bake-res 128 --placement 0,0,0.25,0.7,35 --images docs/images
 """
 
 import os

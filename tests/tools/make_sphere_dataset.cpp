@@ -1,7 +1,7 @@
-// Writes the NeRF tests' sphere data set (tests/nerf_test_scene.h: three shaded spheres seen from cameras on a
-// sphere) as PNG frames + transforms.json, and the small config those tests train with as config.json, so that
-// tests outside C++ (the Blender add-on's) can train a model with the nerfpt binary in seconds.
-// Usage: nerfpt_make_sphere_dataset OUT_DIR [VIEWS [SIZE]]
+// Writes the NeRF tests' sphere data set (tests/nerf_test_scene.h: three shaded spheres seen from cameras on
+// a sphere) as PNG frames + transforms.json, and the small config those tests train with as config.json, so
+// that tests outside C++ (the Blender add-on's) can train a model with the nerfpt binary in seconds. Usage:
+// nerfpt_make_sphere_dataset OUT_DIR [VIEWS [SIZE]]
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
             return 2;
         }
         npt::test::write_dataset(npt::test::make_sphere_scene(o), out, o.fov_degrees);
-        std::ofstream(out / "config.json") << npt::nerf::config_to_json(npt::test::small_sphere_config()).dump(2);
+        std::ofstream(out / "config.json")
+            << npt::nerf::config_to_json(npt::test::small_sphere_config()).dump(2);
         std::printf("wrote %d views of %dx%d and config.json to %s\n", o.views, o.size, o.size, out.c_str());
     } catch (const std::exception& e) {
         std::fprintf(stderr, "nerfpt_make_sphere_dataset: %s\n", e.what());
