@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # GPU cycle for the lent GPU machine (no Debian libraries there, no package registry, 64 MiB may travel):
 #   scripts/gpu_check.sh pack       here: build the GPU binaries for sm_90 (the nerfpt CLI, the GPU tests and
-#                                   the NeRF benchmarks) and pack them with the non-system shared libraries they
-#                                   need into .gpu/bundle.tar.xz, plus the lego views the benchmarks use
-#                                   (100 training views, every 4th test view) into .gpu/lego/
+#                                   the benchmarks; the OptiX backend when .optix/ holds the SDK headers) and
+#                                   pack them with the non-system shared libraries they need into
+#                                   .gpu/bundle.tar.xz, plus the lego views the benchmarks use (100 training
+#                                   views, every 4th test view) and the Cornell reference scenes into .gpu/
 #   scripts/gpu_check.sh run        there (carry .gpu): unpack and run every GPU-labelled test
 #   scripts/gpu_check.sh bench ...  there, after run: bench/train_bench with the given arguments
 # The unpacked binaries are in /tmp/nerfpt-gpu/bin; NERFPT_CLI points the tests at the CLI there.
@@ -27,10 +28,10 @@ pack)
     build=${BUILD_DIR:-build}
     cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DNERFPT_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 \
         ${CUDACXX:+-DCMAKE_CUDA_COMPILER=$CUDACXX} >/dev/null
-    cmake --build "$build" --target nerfpt_gpu_tests nerfpt_cli train_bench view_bench
+    cmake --build "$build" --target nerfpt_gpu_tests nerfpt_cli train_bench view_bench render_bench
     rm -rf .gpu/stage && mkdir -p .gpu/stage/bin .gpu/stage/lib
     cp "$build/tests/nerfpt_gpu_tests" "$build/nerfpt" "$build/bench/train_bench" "$build/bench/view_bench" \
-        .gpu/stage/bin/
+        "$build/bench/render_bench" .gpu/stage/bin/
     # Everything ldd resolves outside the C runtime travels along (the GPU machine runs another distribution).
     for b in .gpu/stage/bin/*; do ldd "$b"; done | awk '/=> \// {print $3}' | sort -u |
         grep -v -E '/(libc|libm|libdl|libpthread|librt|libgcc_s|libstdc\+\+|ld-linux[^/]*|libcuda)\.so' |
@@ -39,6 +40,12 @@ pack)
     rm -rf .gpu/stage
     # The lego views the benchmarks read: the training set and test views 0, 4, 8, ... (train_bench
     # --test-every 4 on the full set scores the same 50 views as --test-every 1 on this one).
+    # The reference scenes the OptiX parity tests and render_bench use (a few MB).
+    scenes=${NERFPT_SHARED_DATA:-../shared/data}/scenes
+    if [[ -d $scenes ]]; then
+        rm -rf .gpu/scenes && mkdir -p .gpu/scenes
+        cp -r "$scenes/cornell" "$scenes/cornell_volume" .gpu/scenes/
+    fi
     src=${NERFPT_SHARED_DATA:-../shared/data}/nerf_synthetic/lego
     if [[ -d $src ]]; then
         dst=.gpu/nerf_synthetic/lego
