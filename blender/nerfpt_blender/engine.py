@@ -11,7 +11,7 @@ import traceback
 import bpy
 
 from . import child_process, export_scene, main_thread, preferences
-from .nerfpt_cli import NerfptError
+from .nerfpt_cli import NerfptError, ignored_report
 
 
 def _threads(scene):
@@ -111,9 +111,9 @@ class NerfptRenderEngine(bpy.types.RenderEngine):
                 result.layers[0].load_from_file(exr)
             finally:
                 self.end_result(result)
-            notes = notes + [f"nerfpt: {w}" for w in child.warnings()]
-            if notes:
-                self.report({"WARNING"}, "nerfpt ignores: " + "; ".join(notes))
+            warning = ignored_report(notes, child.warnings(), gltf)
+            if warning:
+                self.report({"WARNING"}, warning)
             self.update_progress(1.0)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)

@@ -13,7 +13,7 @@ import bpy
 from mathutils import Matrix
 
 from . import gltf_post
-from .nerfpt_cli import NerfptError
+from .nerfpt_cli import NerfptError, ignored_report
 
 CUBE_BIN = "nerfpt_volumes.bin"
 
@@ -371,8 +371,9 @@ class NERFPT_OT_export_scene(bpy.types.Operator):
         except NerfptError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        if notes:
-            self.report({"WARNING"}, "nerfpt ignores: " + "; ".join(notes))
+        warning = ignored_report(notes)
+        if warning:
+            self.report({"WARNING"}, warning)
         self.report(
             {"INFO"}, f"wrote {path} (render it with: nerfpt render {os.path.basename(path)} -o out.exr)"
         )

@@ -124,3 +124,16 @@ def failure_message(stderr_lines, returncode):
     if last:
         return last[-1][:300]
     return f"nerfpt exited with code {returncode}"
+
+
+def ignored_report(notes, nerfpt_warnings=(), scene_file=None):
+    """The one warning of an export or a render: what the add-on found nerfpt does not render as Blender does
+    (notes), then nerfpt's own warnings about the scene (its temporary file called 'scene'), each listed once in
+    the order found. None when there is nothing to say."""
+    items = list(notes)
+    for w in nerfpt_warnings:
+        if scene_file:
+            w = w.replace(scene_file + ": ", "scene: ")
+        items.append("nerfpt: " + w)
+    unique = list(dict.fromkeys(items))
+    return "nerfpt ignores: " + "; ".join(unique) if unique else None

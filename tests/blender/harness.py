@@ -37,6 +37,39 @@ def log(msg):
     print(f"[{time.time() - _T0:6.1f} s] {msg}", flush=True)
 
 
+def console(fn):
+    """Runs fn() and returns (its result, what was printed on the console meanwhile): stdout and stderr at the
+    file-descriptor level, so that Blender's own printing is included (in background mode Blender prints
+    operator and render-engine reports as 'Warning: ...' and render stats as 'Fra:1 ... | STATS' lines)."""
+    import ctypes
+    import tempfile
+
+    libc = ctypes.CDLL(None)
+
+    def flush():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        libc.fflush(None)
+
+    flush()
+    saved = [os.dup(1), os.dup(2)]
+    with tempfile.TemporaryFile() as f:
+        os.dup2(f.fileno(), 1)
+        os.dup2(f.fileno(), 2)
+        try:
+            result = fn()
+        finally:
+            flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved:
+                os.close(fd)
+            f.seek(0)
+            text = f.read().decode(errors="replace")
+            print(text, end="", flush=True)  # still in the test's log
+    return result, text
+
+
 def check(cond, msg):
     if not cond:
         raise AssertionError(msg)

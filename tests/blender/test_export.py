@@ -1,8 +1,10 @@
 """Export round trip: a Blender scene with a mesh, a point light, a camera and an imported capture exports
 (File > Export > nerfpt scene) to a glTF that `nerfpt info` reads back with the volume, the camera and the light
 where Blender has them, the capture's extras pointing at its model (or its grid), the render settings as scene
-extras and materials mapped as docs/blender.md says. Then render errors: nerfpt's own error (a model file that
-went missing) reaches Blender as one readable line, not a traceback.
+extras and materials mapped as docs/blender.md says; what nerfpt does not render as Blender does is one warning
+report, each thing listed once. Then F12 with the nerfpt engine: the image comes back, with nerfpt's progress in
+Blender's render stats and the same one warning. Then render errors: nerfpt's own error (a model file that went
+missing) reaches Blender as one readable line, not a traceback.
 
 blender -b --factory-startup --python tests/blender/test_export.py -- --build BUILD --name export
 """
@@ -104,12 +106,41 @@ sc.world = bpy.data.worlds.new("grey")
 sc.world.use_nodes = True
 sc.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.1, 0.2, 0.3, 1.0)
 sc.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 2.0
+# What nerfpt does not render as Cycles does: an area light, and a Principled subsurface on a material that two
+# meshes share (listed once all the same).
 area = bpy.data.objects.new("softbox", bpy.data.lights.new("softbox", "AREA"))
 sc.collection.objects.link(area)
+skin = bpy.data.materials.new("skin")
+skin.use_nodes = True
+skin.node_tree.nodes.clear()
+bsdf = skin.node_tree.nodes.new("ShaderNodeBsdfPrincipled")
+skin.node_tree.links.new(bsdf.outputs[0], skin.node_tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+bsdf.inputs[next(k for k in ("Subsurface", "Subsurface Weight") if k in bsdf.inputs)].default_value = 0.2
+for i in range(2):
+    me = bpy.data.meshes.new(f"skin{i}")
+    me.from_pydata([(-2, -2, 5 + i), (2, -2, 5 + i), (2, 2, 5 + i)], [], [(0, 1, 2)])  # out of view
+    me.materials.append(skin)
+    sc.collection.objects.link(bpy.data.objects.new(f"skin{i}", me))
+IGNORED = (
+    "area light 'softbox' is not exported (use an emissive mesh)",
+    "material 'skin': Principled subsurface is ignored",
+)
+
+
+def check_ignored(printed, what):
+    """One warning report (Blender prints reports as 'Warning: ...' in background mode), each thing once."""
+    lines = [ln for ln in printed.splitlines() if "nerfpt ignores:" in ln]
+    h.check(len(lines) == 1, f"{what}: {len(lines)} 'nerfpt ignores' reports, not one: {lines}")
+    h.check(lines[0].startswith("Warning: nerfpt ignores: "), f"{what}: not a warning report: {lines[0]}")
+    for note in IGNORED:
+        h.check(lines[0].count(note) == 1, f"{what}: '{note}' listed {lines[0].count(note)} times: {lines[0]}")
+    h.log(f"{what}: {lines[0]}")
+
 
 gltf_path = os.path.join(a.work, "scene.gltf")
-result = bpy.ops.export_scene.nerfpt_gltf(filepath=gltf_path)
+result, printed = h.console(lambda: bpy.ops.export_scene.nerfpt_gltf(filepath=gltf_path))
 h.check(result == {"FINISHED"}, f"export returned {result}")
+check_ignored(printed, "export")
 info = h.nerfpt(a, "info", gltf_path).stdout
 h.log("nerfpt info scene.gltf:\n" + info.rstrip())
 
@@ -176,6 +207,20 @@ for name, line in (
     )
 h.check(re.search(r"^render\s+80x60, 16 spp, max depth 4\b", info, re.M), "render settings")
 h.check(re.search(r"^\s+environment constant \(0\.2, 0\.4, 0\.6\)", info, re.M), "world colour x strength")
+
+# F12 with the nerfpt engine: the image comes back, nerfpt's progress reaches Blender's progress and stats, and
+# what nerfpt ignores is one warning. (nerfpt prints progress lines after 2 s only: a render this short shows
+# its final 100%.)
+f12 = os.path.join(a.work, "f12.exr")
+seconds, printed = h.console(lambda: h.render(f12, "NERFPT", 16, 1))
+check_ignored(printed, "F12")
+h.check(
+    re.search(r"\| nerfpt: rendering 80x60, 16 spp: 100%$", printed, re.M),
+    "nerfpt's progress did not reach Blender's render stats",
+)
+px = h.read_exr(f12)
+h.check(px.shape == (60, 80, 3) and px.mean() > 0.01, f"the F12 image: shape {px.shape}, mean {px.mean():.4g}")
+h.log(f"F12: {seconds:.1f} s, image mean {px.mean():.4g}")
 
 # The grid instead of the model: its density is per local unit, the export makes it per world unit.
 obj.nerfpt_volume.source = "GRID"

@@ -59,6 +59,22 @@ class CliOutput(unittest.TestCase):
         self.assertEqual(nerfpt_cli.failure_message([], -9), "nerfpt was killed by signal 9")
         self.assertEqual(nerfpt_cli.failure_message([], 3), "nerfpt exited with code 3")
 
+    def test_ignored_report_lists_each_thing_once(self):
+        self.assertIsNone(nerfpt_cli.ignored_report([], []))
+        gltf = "/tmp/nerfpt-render-x/scene.gltf"
+        report = nerfpt_cli.ignored_report(
+            ["area light 'a' is not exported", "motion blur is ignored", "area light 'a' is not exported"],
+            [f"{gltf}: mesh 'edges': primitive mode 1 is not TRIANGLES", f"{gltf}: mesh 'edges': primitive mode 1 "
+             "is not TRIANGLES", "motion blur is ignored"],
+            gltf,
+        )
+        self.assertEqual(
+            report,
+            "nerfpt ignores: area light 'a' is not exported; motion blur is ignored; nerfpt: scene: mesh 'edges': "
+            "primitive mode 1 is not TRIANGLES; nerfpt: motion blur is ignored",
+        )
+        self.assertEqual(nerfpt_cli.ignored_report(["x"]), "nerfpt ignores: x")
+
     def test_find_and_check_binary(self):
         with tempfile.TemporaryDirectory() as d:
             with self.assertRaisesRegex(nerfpt_cli.NerfptError, "does not exist"):
