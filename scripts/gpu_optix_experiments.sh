@@ -22,8 +22,8 @@ for textures in 1 0; do
     bench --res 1920x1080 --spp 1 --repeats 3 --frames 20 --scene-file $demo/scene_baked.gltf
 done
 unset NERFPT_OPTIX_GRID_TEXTURES
-for regs in 64 96 0; do
-    echo "NERFPT_OPTIX_MAX_REGISTERS=$regs (0: OptiX's default)" | tee -a "$out/experiments.log"
+for regs in 64 96 0; do  # 96 is the default since this run
+    echo "NERFPT_OPTIX_MAX_REGISTERS=$regs (0: OptiX's default, 128 here)" | tee -a "$out/experiments.log"
     export NERFPT_OPTIX_MAX_REGISTERS=$regs
     bench --res 1920x1080 --spp 64 --repeats 3 --scene cornell --scene cornell_volume
     bench --res 1920x1080 --spp 1 --repeats 2 --frames 5 --scene-file $demo/scene.gltf

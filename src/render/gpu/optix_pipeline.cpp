@@ -37,11 +37,10 @@ OptixPrograms::OptixPrograms(OptixDeviceContext ctx, const std::vector<uint32_t>
     size_t log_size = sizeof log;
 
     OptixModuleCompileOptions module_options{};
-    // NERFPT_OPTIX_MAX_REGISTERS (a benchmark knob, docs/benchmarks.md): fewer registers per thread, more warps
-    // resident to hide latency, at the price of spills.
+    // 96 registers per thread: measured faster than OptiX's default (128) and than 64 on cornell at 1080p
+    // (docs/benchmarks.md); NERFPT_OPTIX_MAX_REGISTERS overrides it for such measurements (0: OptiX's default).
     const char* max_registers = std::getenv("NERFPT_OPTIX_MAX_REGISTERS");
-    module_options.maxRegisterCount =
-        max_registers ? std::atoi(max_registers) : int(OPTIX_COMPILE_DEFAULT_MAX_REGISTER_COUNT);
+    module_options.maxRegisterCount = max_registers ? std::atoi(max_registers) : 96;
     module_options.optLevel = OPTIX_COMPILE_OPTIMIZATION_DEFAULT;
     module_options.debugLevel = OPTIX_COMPILE_DEBUG_LEVEL_MINIMAL;
     OptixPipelineCompileOptions pipeline_options{};
