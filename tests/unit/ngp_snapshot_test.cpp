@@ -618,6 +618,15 @@ TEST(NgpSnapshot, BadFiles) {
                         {"bad.msgpack", "not a MessagePack snapshot"});
 }
 
+// nlohmann's MessagePack reader recurses once per level: 200 000 nested arrays overflowed the stack.
+TEST(NgpSnapshot, DeeplyNestedIsAnErrorNotACrash) {
+    std::vector<uint8_t> deep = {0x81, 0xa1, 'a'};  // {"a": [[[...]]]}
+    deep.insert(deep.end(), 200000, 0x91);
+    deep.push_back(0xc0);
+    expect_import_error(deep, {"bad.msgpack", "nested deeper than 256 levels"});
+    expect_import_error(gzip(deep), {"bad.msgpack", "nested deeper"});
+}
+
 TEST(NgpSnapshot, MissingKeys) {
     for (const char* key : {"snapshot", "encoding", "network", "rgb_network", "dir_encoding"}) {
         Mp f = good_file();
