@@ -5,12 +5,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <tuple>
 
 #include "core/error.h"
 #include "core/image_io.h"
 #include "scene/mesh_utils.h"
+#include "scene/obj_syntax.h"
 #include "scene/texture_utils.h"
 
 namespace npt::scene {
@@ -75,6 +78,21 @@ void load_obj(const fs::path& path, Scene& scene, const Mat4& placement) {
     const std::string file = path.string();
     std::error_code ec;
     if (!fs::exists(path, ec)) throw Error(file + ": file not found");
+    // Our strict pass first (obj_syntax.h): tinyobjloader turns what it cannot parse into 0.
+    const auto read_text = [](const fs::path& p) {
+        std::ifstream f(p, std::ios::binary);
+        if (!f) throw Error(p.string() + ": cannot open");
+        std::stringstream ss;
+        ss << f.rdbuf();
+        return ss.str();
+    };
+    for (const std::string& lib : check_obj_text(read_text(path), file)) {
+        const fs::path mtl = path.parent_path() / lib;
+        if (fs::is_regular_file(mtl, ec)) {
+            check_mtl_text(read_text(mtl), mtl.string());
+            scene.files.push_back(mtl);
+        }
+    }
     tinyobj::ObjReaderConfig config;
     config.triangulate = true;
     config.vertex_color = false;
@@ -164,11 +182,12 @@ void load_obj(const fs::path& path, Scene& scene, const Mat4& placement) {
                 vol.local_to_world = placement;
                 vol.declared_in = file;
                 mesh_bounds(mesh, vol.local_min, vol.local_max);
+                check_volume_placement(vol, file + ": volume '" + vol.name + "'");
                 scene.volumes.push_back(std::move(vol));
                 continue;
             }
             if (mat.normal_texture >= 0 && mesh.normals.empty()) generate_smooth_normals(mesh);
-            transform_mesh(mesh, placement);
+            transform_mesh(mesh, placement, file + ": shape '" + shape.name + "'");
             scene.meshes.push_back(std::move(mesh));
         }
     }

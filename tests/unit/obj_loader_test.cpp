@@ -122,5 +122,51 @@ TEST(ObjLoaderBadInput, MissingEmptyAndBroken) {
     expect_error(dir / "tex.obj", {"tex.obj", "material 't'", "map_Kd", "missing.png"});
 }
 
+// tinyobjloader turns numbers it cannot parse into 0 and reads indices with atoi, unchecked; our strict pass
+// (scene/obj_syntax.h) reports each with its line.
+TEST(ObjLoaderBadInput, NonFiniteNumbersAndBadIndices) {
+    const fs::path dir = test::temp_dir();
+    const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    const struct {
+        const char* name;
+        std::string text;
+        std::vector<std::string> parts;
+    } cases[] = {
+        {"nan", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "v:", "'nan' is not a finite number"}},
+        {"inf", "v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "'inf'"}},
+        {"overflow", "v 0 0 0\nv 1e400 0 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "'1e400'"}},
+        {"comma", "v 0 0 0\nv 1,5 0 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "'1,5'"}},
+        {"short", "v 0 0\n", {"line 1", "expected 3 to 7 numbers, got 2"}},
+        {"vn", tri + "vn 0 0 nan\nf 1//1 2//1 3//1\n", {"line 4", "vn:"}},
+        {"uv_range", tri + "vt 0 0\nf 1/1 2/1 3/9\n", {"line 5", "f:", "index 9 is out of range", "1 texture coordinates"}},
+        {"uv_relative", tri + "vt 0 0\nf 1/-1 2/-1 3/-2\n", {"line 5", "relative index -2"}},
+        {"normal_range", tri + "f 1//1 2//1 3//1\n", {"line 4", "0 normals"}},
+        {"vertex_range", tri + "f 1 2 4\n", {"line 4", "index 4 is out of range (the file has 3 vertices)"}},
+        {"zero", tri + "f 0 1 2\n", {"line 4", "index 0"}},
+        {"beyond64", tri + "f 1 2 99999999999999999999999\n", {"line 4", "beyond 64 bits"}},
+        {"beyond32", tri + "f 1 2 4294967299\n", {"line 4", "beyond 32 bits"}},
+        {"notint", tri + "f 1 2 3.5\n", {"line 4", "'3.5' is not an integer index"}},
+        {"parts", tri + "f 1/1/1/1 2 3\n", {"line 4", "more than three parts"}},
+        {"mtl", "mtllib bad.mtl\n" + tri + "usemtl x\nf 1 2 3\n", {"bad.mtl", "line 2", "Kd:", "'nan'"}},
+    };
+    test::write_file(dir / "bad.mtl", "newmtl x\nKd 1 nan 0\n");
+    for (const auto& c : cases) {
+        const fs::path path = dir / (std::string(c.name) + ".obj");
+        test::write_file(path, c.text);
+        try {
+            load_scene(path);
+            ADD_FAILURE() << "no error for " << c.name;
+        } catch (const Error& e) {
+            for (const auto& part : c.parts)
+                EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what() << " lacks " << part;
+        }
+    }
+    // Valid forms still load: relative indices, v/vt/vn, a w coordinate, vertex colours, comments.
+    test::write_file(dir / "ok.obj", "v 0 0 0 1\nv 1 0 0 0.5 0.5 0.5\nv +0 1 0 # top\nvt 0 0\nvn 0 0 1\n"
+                                     "f -3/1/1 -2/1/1 -1/1/1\n");
+    const Scene s = load_scene(dir / "ok.obj");
+    EXPECT_EQ(s.triangle_count(), 1u);
+}
+
 }  // namespace
 }  // namespace npt::scene
