@@ -72,7 +72,15 @@ nanovdb::GridHandle<> read_typed(const std::string& where, const nanovdb::io::Gr
                     " bytes in a file of " + std::to_string(file_size) + " bytes (corrupt file)");
     auto handle = nanovdb::io::readGrid<nanovdb::HostBuffer>(where, meta.gridName);
     const auto* g = handle.template grid<ValueT>();
-    if (!g || !nanovdb::isValid(*g, true, false)) throw Error(where + ": " + grid + " is corrupt");
+    if (!g || !nanovdb::isValid(*g, true, false))
+        throw Error(where + ": " + grid + " is corrupt (its structure or checksum does not match)");
+    // isValid checks the checksum the file carries. NanoVDB's default (partial) covers the header and upper
+    // nodes only, so a flipped voxel value goes unnoticed: say so once per grid.
+    const nanovdb::ChecksumMode mode = nanovdb::GridChecksum(g->checksum()).mode();
+    if (mode != nanovdb::ChecksumMode::Full)
+        spdlog::warn("{}: {} carries {} checksum: corrupted voxel values cannot be detected (nerfpt bake writes a "
+                     "full one)",
+                     where, grid, mode == nanovdb::ChecksumMode::Partial ? "only a partial" : "no");
     return handle;
 }
 
