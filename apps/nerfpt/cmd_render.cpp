@@ -13,7 +13,9 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/progress.h"
+#include "input_checks.h"
 #include "interrupt.h"
+#include "media/volume_set.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
 
@@ -118,6 +120,22 @@ void check_output(const fs::path& out) {
     if (fs::is_directory(out, ec)) throw Error("--output '" + out.string() + "': is a folder");
 }
 
+// Every file the scene was read from: the scene files, its textures and its volumes' grids or models.
+std::vector<InputFile> scene_inputs(const scene::Scene& scene) {
+    std::vector<InputFile> in;
+    for (const auto& f : scene.files) in.push_back({"scene file", f});
+    for (const auto& t : scene.textures) in.push_back({"texture", t.name});  // "<embedded #i>" matches no file
+    for (const auto& v : scene.volumes) {
+        const fs::path declared = v.declared_in.empty() ? scene.source : v.declared_in;
+        try {
+            const fs::path file = media::parse_volume_desc(v.extras_json, declared.string()).file;
+            in.push_back({"volume file", file.is_relative() ? declared.parent_path() / file : file});
+        } catch (const Error&) {  // reported when the volume is loaded
+        }
+    }
+    return in;
+}
+
 }  // namespace
 
 int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
@@ -138,6 +156,7 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     scene::LoadOptions load;
     load.camera_name = args.camera;
     const scene::Scene scene = scene::load_scene(args.scene, load);
+    for (const fs::path& out : {out_exr, out_png}) refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
     options.seed = args.seed_given ? args.seed : scene.settings.seed;
     const render::RenderOptions resolved = render::resolve_options(scene, options);
     spdlog::debug("loaded {} in {:.2f} s: {} meshes, {} triangles", args.scene,

@@ -117,6 +117,7 @@ class TrainProgress {
 int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
     const fs::path out = args.output;
     check_output(out, args.resume, args.force);
+    refuse_overwriting_inputs(out, "--output", {{"DATA", args.data}, {"--config", args.config}});
     std::optional<tbb::global_control> threads;
     if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
 
@@ -131,6 +132,7 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     }
     const bool tty = stream_is_tty(stderr);
     nerf::Dataset data = load_dataset_with_progress(args.data, args.split, args.downscale, global.quiet);
+    refuse_overwriting_inputs(out, "--output", dataset_inputs(data));
     if (!args.resume) {
         const nerf::NerfConfig config = args.config.empty() ? nerf::NerfConfig{} : nerf::load_config(args.config);
         model = nerf::create_model(config, data.aabb_scale, nerf::ngp_world_to_model(data.scale, data.offset));
