@@ -7,8 +7,9 @@
 namespace npt::cli {
 namespace {
 
+// Decimal digits from `from` on, without a leading zero (CLI11 reads "010" as octal 8, "0x10" as 16).
 bool decimal_digits(const std::string& s, size_t from) {
-    if (s.size() <= from) return false;
+    if (s.size() <= from || (s[from] == '0' && s.size() > from + 1)) return false;
     for (size_t i = from; i < s.size(); ++i)
         if (s[i] < '0' || s[i] > '9') return false;
     return true;
@@ -33,13 +34,13 @@ const CLI::Validator k_finite(
 const CLI::Validator k_integer(
     [](std::string& text) {
         if (decimal_digits(text, text.rfind('-', 0) == 0 ? 1 : 0)) return std::string();
-        return "'" + text + "' is not a whole number in decimal digits";
+        return "'" + text + "' is not a whole number in decimal digits (no leading zero)";
     },
     "");
 const CLI::Validator k_unsigned(
     [](std::string& text) {
         if (decimal_digits(text, 0)) return std::string();
-        return "'" + text + "' is not a whole number >= 0 in decimal digits";
+        return "'" + text + "' is not a whole number >= 0 in decimal digits (no leading zero)";
     },
     "");
 

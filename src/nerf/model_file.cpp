@@ -116,7 +116,8 @@ size_t first_non_finite(const std::vector<float>& x) {
 class AtomicWriter {
   public:
     explicit AtomicWriter(const fs::path& path)
-        : m_path(path), m_tmp(new_temp_path(path)) {
+        : m_path(path), m_tmp(path.string() + ".tmp-" + std::to_string(::getpid())) {
+        remove_stale_temporaries(path);  // of killed writers (core/temp_file.h)
         m_file = std::fopen(m_tmp.c_str(), "wb");
         if (!m_file)
             throw Error(m_path.string() + ": cannot create the temporary file " + m_tmp.string() + " (" +

@@ -141,12 +141,17 @@ void load_include(const Reader& r, const json& inc, const std::string& field, co
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return char(std::tolower(c)); });
     scene.files.push_back(p);
-    if (ext == ".gltf" || ext == ".glb") {
-        load_gltf(p, LoadOptions{}, scene, m);
-    } else if (ext == ".obj") {
-        load_obj(p, scene, m);
-    } else {
+    if (ext != ".gltf" && ext != ".glb" && ext != ".obj")
         r.fail(field, "'" + rel + "': can include only .gltf, .glb and .obj files");
+    // The included file's own error names it and its field; prefixed with ours, the line says which include
+    // (and its placement) led there.
+    try {
+        if (ext == ".obj")
+            load_obj(p, scene, m);
+        else
+            load_gltf(p, LoadOptions{}, scene, m);
+    } catch (const Error& e) {
+        r.fail(field, e.what());
     }
 }
 
@@ -172,6 +177,7 @@ void read_camera(const Reader& r, const json& c, Scene& scene) {
     Camera cam;
     cam.name = "json";
     cam.position = r.vec3(c["position"], "camera.position");
+    check_world_point(cam.position, r.file() + ": camera", "position");
     const Vec3 target = r.vec3(c["look_at"], "camera.look_at");
     const Vec3 up = c.contains("up") ? r.vec3(c["up"], "camera.up") : Vec3(0, 1, 0);
     const Vec3 f = target - cam.position;
@@ -192,7 +198,6 @@ void read_camera(const Reader& r, const json& c, Scene& scene) {
         if (!(cam.aspect >= 0.0f) || !std::isfinite(cam.aspect))
             r.fail("camera.aspect", "expected width / height > 0 (or 0: the image's)");
     }
-    check_world_point(cam.position, r.file() + ": camera", "position");
     scene.cameras.push_back(cam);
     scene.camera = int(scene.cameras.size()) - 1;
 }

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -133,6 +134,8 @@ std::vector<std::string> check_obj_text(std::string_view text, const std::string
             for (size_t i = 1; i < t.size(); ++i) {
                 // v, v/vt, v//vn or v/vt/vn
                 const std::string_view corner = t[i];
+                if (std::count(corner.begin(), corner.end(), '/') > 2)
+                    fail(in_quotes(corner) + " has more than three parts (v/vt/vn)");
                 const size_t s1 = corner.find('/');
                 check_index(corner.substr(0, s1), 0, before, total, fail);
                 if (s1 == std::string_view::npos) continue;
@@ -141,10 +144,7 @@ std::vector<std::string> check_obj_text(std::string_view text, const std::string
                 const std::string_view uv = rest.substr(0, s2);
                 if (!uv.empty() || s2 == std::string_view::npos) check_index(uv, 1, before, total, fail);
                 if (s2 == std::string_view::npos) continue;
-                const std::string_view normal = rest.substr(s2 + 1);
-                if (normal.find('/') != std::string_view::npos)
-                    fail(in_quotes(corner) + " has more than three parts (v/vt/vn)");
-                check_index(normal, 2, before, total, fail);
+                check_index(rest.substr(s2 + 1), 2, before, total, fail);
             }
         } else if (t[0] == "mtllib") {
             for (size_t i = 1; i < t.size(); ++i) mtllibs.emplace_back(t[i]);

@@ -526,7 +526,7 @@ TEST(GltfLoaderBadInput, NodeCycle) {
 TEST(GltfLoaderBadInput, WrongTypesAreErrors) {
     struct Case {
         std::function<void(Builder&)> edit;
-        std::initializer_list<std::string> parts;
+        std::vector<std::string> parts;
     };
     const std::vector<Case> cases = {
         {[](Builder& b) { b.j["meshes"][0]["primitives"] = 5; }, {"meshes[0].primitives", "got an integer"}},
@@ -553,7 +553,7 @@ TEST(GltfLoaderBadInput, WrongTypesAreErrors) {
         parts.insert(parts.end(), c.parts.begin(), c.parts.end());
         try {
             load_scene(b.write());
-            ADD_FAILURE() << "no error for " << c.parts.begin()[0];
+            ADD_FAILURE() << "no error for " << c.parts[0];
         } catch (const Error& e) {
             for (const auto& part : parts)
                 EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what() << " lacks " << part;
@@ -576,7 +576,8 @@ TEST(GltfLoaderBadInput, OutOfRangeValues) {
                  {"scene.gltf", "emissiveStrength", "-100", ">= 0"});
     {
         Builder b;
-        b.j["cameras"] = json::array({{{"type", "perspective"}, {"perspective", {{"yfov", 0.5}, {"aspectRatio", -2}}}}});
+        b.j["cameras"] = json::array(
+            {{{"type", "perspective"}, {"perspective", {{"yfov", 0.5}, {"znear", 0.1}, {"aspectRatio", -2}}}}});
         b.node({{"camera", 0}});
         b.node({{"mesh", b.triangle()}});
         expect_error(b.write(), {"scene.gltf", "cameras[0].perspective.aspectRatio", "-2", "> 0"});
@@ -627,7 +628,7 @@ TEST(GltfLoaderBadInput, TransformsOverflowingWorldSpace) {
     }
     {
         Builder b;
-        b.j["cameras"] = json::array({{{"type", "perspective"}, {"perspective", {{"yfov", 0.5}}}}});
+        b.j["cameras"] = json::array({{{"type", "perspective"}, {"perspective", {{"yfov", 0.5}, {"znear", 0.1}}}}});
         b.node({{"name", "cam"}, {"camera", 0}, {"translation", {1e30, 0, 0}}});
         b.node({{"mesh", b.triangle()}});
         expect_error(b.write(), {"scene.gltf", "camera 'cam'", "position", "beyond"});
