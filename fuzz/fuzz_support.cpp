@@ -27,7 +27,8 @@ const fs::path& scratch() {
 
 fs::path put(const std::string& name, const uint8_t* data, size_t size) {
     const fs::path p = scratch() / name;
-    std::ofstream(p, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data), std::streamsize(size));
+    std::ofstream(p, std::ios::binary | std::ios::trunc)
+        .write(reinterpret_cast<const char*>(data), std::streamsize(size));
     return p;
 }
 

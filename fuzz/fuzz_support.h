@@ -1,5 +1,5 @@
-// What every harness shares: a private scratch folder (each fuzzing process its own, files relative to it so a
-// fuzzed path cannot name another one), writing the input there, and the rule for what counts as a finding.
+// What every harness shares: a private scratch folder (each fuzzing process its own, files relative to it so
+// a fuzzed path cannot name another one), writing the input there, and the rule for what counts as a finding.
 #pragma once
 
 #include <cstddef>
@@ -19,8 +19,8 @@ std::filesystem::path put(const std::string& name, const uint8_t* data, size_t s
 std::filesystem::path put(const std::string& name, std::string_view text);
 
 // Runs a loader on fuzzed input: npt::Error is the expected way to refuse it. Anything else that escapes (a
-// std::exception from a library, a crash, a sanitizer report, a hang) is a finding: the exception is rethrown,
-// which libFuzzer reports as a crash with its input saved.
+// std::exception from a library, a crash, a sanitizer report, a hang) is a finding: the exception is
+// rethrown, which libFuzzer reports as a crash with its input saved.
 template <typename Fn>
 void refuse_or_load(Fn&& fn);
 

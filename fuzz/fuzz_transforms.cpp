@@ -1,4 +1,5 @@
-// NeRF data sets: transforms.json (nerf/dataset.h). The scratch folder holds a.png and b.png (4x3) for frames.
+// NeRF data sets: transforms.json (nerf/dataset.h). The scratch folder holds a.png and b.png (4x3) for
+// frames.
 #include "core/image.h"
 #include "core/image_io.h"
 #include "fuzz_support.h"

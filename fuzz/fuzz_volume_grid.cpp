@@ -1,5 +1,5 @@
-// Volume grids (media/volume_grid.h). First byte: 0 OpenVDB (.vdb), 1 NanoVDB (.nvdb), else an instant-ngp raw
-// grid whose size W, H, D (1..255) are the next three bytes; the rest is the file.
+// Volume grids (media/volume_grid.h). First byte: 0 OpenVDB (.vdb), 1 NanoVDB (.nvdb), else an instant-ngp
+// raw grid whose size W, H, D (1..255) are the next three bytes; the rest is the file.
 #include <string>
 
 #include "fuzz_support.h"
@@ -16,8 +16,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         name = "in.nvdb";
     } else {
         if (size < 4) return 0;
-        name = std::to_string(int(data[1])) + "x" + std::to_string(int(data[2])) + "x" + std::to_string(int(data[3])) +
-               "_in.bin";
+        name = std::to_string(int(data[1])) + "x" + std::to_string(int(data[2])) + "x" +
+               std::to_string(int(data[3])) + "_in.bin";
         skip = 4;
     }
     const auto path = fuzz::put(name, data + skip, size - skip);

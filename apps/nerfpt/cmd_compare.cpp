@@ -23,8 +23,8 @@ int run_compare(const CompareArgs& args, const GlobalSettings&) {
     Image ref = read_image(args.reference);
     const auto size = [](const Image& i) { return std::to_string(i.width) + "x" + std::to_string(i.height); };
     if (image.width != ref.width || image.height != ref.height)
-        throw Error("IMAGE '" + args.image + "' is " + size(image) + " but REFERENCE '" + args.reference + "' is " +
-                    size(ref) + ": compare needs images of the same size");
+        throw Error("IMAGE '" + args.image + "' is " + size(image) + " but REFERENCE '" + args.reference +
+                    "' is " + size(ref) + ": compare needs images of the same size");
     ImageComparison c = compare_images(image, ref);
     fmt::print("relMSE     {:.4g}\n", c.rel_mse);
     const char* names[3] = {"R", "G", "B"};

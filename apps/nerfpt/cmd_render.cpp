@@ -124,7 +124,8 @@ void check_output(const fs::path& out) {
 std::vector<InputFile> scene_inputs(const scene::Scene& scene) {
     std::vector<InputFile> in;
     for (const auto& f : scene.files) in.push_back({"scene file", f});
-    for (const auto& t : scene.textures) in.push_back({"texture", t.name});  // "<embedded #i>" matches no file
+    for (const auto& t : scene.textures)
+        in.push_back({"texture", t.name});  // "<embedded #i>" matches no file
     for (const auto& v : scene.volumes) {
         const fs::path declared = v.declared_in.empty() ? scene.source : v.declared_in;
         try {
@@ -156,7 +157,8 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     scene::LoadOptions load;
     load.camera_name = args.camera;
     const scene::Scene scene = scene::load_scene(args.scene, load);
-    for (const fs::path& out : {out_exr, out_png}) refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
+    for (const fs::path& out : {out_exr, out_png})
+        refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
     options.seed = args.seed_given ? args.seed : scene.settings.seed;
     const render::RenderOptions resolved = render::resolve_options(scene, options);
     spdlog::debug("loaded {} in {:.2f} s: {} meshes, {} triangles", args.scene,

@@ -252,7 +252,8 @@ int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard&
         return out.parent_path() / fmt::format("{}_{:04}.png", out.stem().string(), k);
     };
     refuse_overwriting_inputs(out, "--output", inputs);  // e.g. -o r_7.png beside data set image r_7.png
-    for (size_t k = 0; !video && k < cameras.size(); ++k) refuse_overwriting_inputs(frame_path(k), "--output", inputs);
+    for (size_t k = 0; !video && k < cameras.size(); ++k)
+        refuse_overwriting_inputs(frame_path(k), "--output", inputs);
 
     ProgressSettings ps;
     ps.label = "view";

@@ -53,8 +53,9 @@ void refuse_overwriting_inputs(const fs::path& output, const std::string& option
                                const std::vector<InputFile>& inputs) {
     for (const InputFile& in : inputs)
         if (!in.path.empty() && same_file(output, in.path))
-            throw Error(option + " '" + output.string() + "': is the input " + in.what + " '" + in.path.string() +
-                        "'; write the output elsewhere (no command replaces its own input, even with --force)");
+            throw Error(
+                option + " '" + output.string() + "': is the input " + in.what + " '" + in.path.string() +
+                "'; write the output elsewhere (no command replaces its own input, even with --force)");
 }
 
 }  // namespace npt::cli

@@ -106,8 +106,9 @@ int main(int argc, char** argv) {
         return k_exit_error;
     } catch (const std::bad_alloc&) {
         // The large allocations an input or option decides name themselves (core/memory.h); this is the rest.
-        print_error("out of memory: the input or the options ask for more memory than this machine has "
-                    "(lower --res, --spp, image sizes or the config's sizes)");
+        print_error(
+            "out of memory: the input or the options ask for more memory than this machine has "
+            "(lower --res, --spp, image sizes or the config's sizes)");
         return k_exit_error;
     } catch (const std::exception& e) {
         // Not one of ours (bad_alloc, a library's exception): still one line, with its type unspoken.

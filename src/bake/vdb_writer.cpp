@@ -84,8 +84,10 @@ void write_nvdb(const std::filesystem::path& path, const BakedGrid& grid) {
         std::vector<nanovdb::GridHandle<>> handles;
         // A full checksum (NanoVDB's default is partial: header and upper nodes only), so that the reader
         // detects a corrupted voxel too.
-        handles.push_back(nanovdb::openToNanoVDB(*g.density, nanovdb::StatsMode::Default, nanovdb::ChecksumMode::Full));
-        handles.push_back(nanovdb::openToNanoVDB(*g.color, nanovdb::StatsMode::Default, nanovdb::ChecksumMode::Full));
+        handles.push_back(
+            nanovdb::openToNanoVDB(*g.density, nanovdb::StatsMode::Default, nanovdb::ChecksumMode::Full));
+        handles.push_back(
+            nanovdb::openToNanoVDB(*g.color, nanovdb::StatsMode::Default, nanovdb::ChecksumMode::Full));
         std::ofstream out(tmp.path(), std::ios::binary | std::ios::trunc);
         if (!out) throw Error(path.string() + ": cannot write (cannot create a file in its folder)");
         nanovdb::io::writeGrids(out, handles);

@@ -66,10 +66,12 @@ Image decode_stb_sized(const unsigned char* data, size_t size, const std::string
 // 20 GiB.
 Image decode_stb(const unsigned char* data, size_t size, const std::string& name, bool srgb) {
     int w = 0, h = 0, n = 0;
-    const bool known = size > 0 && size <= size_t(INT32_MAX) && stbi_info_from_memory(data, int(size), &w, &h, &n);
+    const bool known =
+        size > 0 && size <= size_t(INT32_MAX) && stbi_info_from_memory(data, int(size), &w, &h, &n);
     const double bytes = known ? double(w) * double(h) * (4.0 * 4.0 + 4.0 * n) : 0.0;
     return with_memory_context(name + ": a " + std::to_string(w) + "x" + std::to_string(h) + " image", bytes,
-                               "use a smaller image", [&] { return decode_stb_sized(data, size, name, srgb); });
+                               "use a smaller image",
+                               [&] { return decode_stb_sized(data, size, name, srgb); });
 }
 
 Image decode_stb_sized(const unsigned char* data, size_t size, const std::string& name, bool srgb) {

@@ -217,8 +217,9 @@ void check_msgpack_depth(const uint8_t* data, size_t size, const std::string& na
         pos += size_t(skip);
         if (children > 0) {
             if (open.size() > size_t(k_max_json_depth))
-                throw Error(name + ": maps and arrays nested deeper than " + std::to_string(k_max_json_depth) +
-                            " levels (at byte " + std::to_string(pos) + ")");
+                throw Error(name + ": maps and arrays nested deeper than " +
+                            std::to_string(k_max_json_depth) + " levels (at byte " + std::to_string(pos) +
+                            ")");
             open.push_back(children);
         }
     }

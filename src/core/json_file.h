@@ -26,8 +26,8 @@ void check_json_depth(std::string_view text, const std::string& name, bool comme
 // that overflow a double (1e400).
 nlohmann::json parse_json_text(std::string_view text, const std::string& name, bool comments = false);
 
-// Reads and parses a file. Throws npt::Error: "PATH: no such file", "PATH: cannot read", "PATH: file is empty",
-// "PATH: not valid JSON: ..." (above).
+// Reads and parses a file. Throws npt::Error: "PATH: no such file", "PATH: cannot read", "PATH: file is
+// empty", "PATH: not valid JSON: ..." (above).
 nlohmann::json read_json_file(const std::filesystem::path& path, bool comments = false);
 
 // The MessagePack counterpart of check_json_depth: walks the encoding without recursion (without allocating

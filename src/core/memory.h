@@ -1,5 +1,6 @@
 // Allocation failures as messages a user can act on: what was being allocated, how much, and what to lower.
-// A bare std::bad_alloc says none of that. Used where an input's sizes or an option decide a large allocation.
+// A bare std::bad_alloc says none of that. Used where an input's sizes or an option decide a large
+// allocation.
 #pragma once
 
 #include <cstdio>
@@ -31,8 +32,8 @@ decltype(auto) with_memory_context(const std::string& what, double bytes, const 
     try {
         return fn();
     } catch (const std::bad_alloc&) {
-        throw Error(what + " needs " + format_bytes(bytes) + " of memory, more than this machine could allocate: " +
-                    hint);
+        throw Error(what + " needs " + format_bytes(bytes) +
+                    " of memory, more than this machine could allocate: " + hint);
     }
 }
 

@@ -28,8 +28,10 @@ int remove_stale_temporaries(const std::filesystem::path& target) {
         // The pid: the digits after ".tmp-", up to '-' or the end.
         size_t i = prefix.size();
         long long pid = 0;
-        while (i < name.size() && name[i] >= '0' && name[i] <= '9' && pid < (1LL << 40)) pid = pid * 10 + (name[i++] - '0');
-        if (i == prefix.size() || (i < name.size() && name[i] != '-') || pid <= 0 || pid > INT32_MAX) continue;
+        while (i < name.size() && name[i] >= '0' && name[i] <= '9' && pid < (1LL << 40))
+            pid = pid * 10 + (name[i++] - '0');
+        if (i == prefix.size() || (i < name.size() && name[i] != '-') || pid <= 0 || pid > INT32_MAX)
+            continue;
         if (pid_t(pid) == ::getpid()) continue;
         if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge (EPERM)
         std::error_code rm;
@@ -47,11 +49,12 @@ int remove_stale_temporaries(const std::filesystem::path& target) {
 std::filesystem::path new_temp_path(const std::filesystem::path& target) {
     remove_stale_temporaries(target);
     std::random_device rd;
-    return target.parent_path() /
-           (target.filename().string() + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(rd() % 1000000));
+    return target.parent_path() / (target.filename().string() + ".tmp-" + std::to_string(getpid()) + "-" +
+                                   std::to_string(rd() % 1000000));
 }
 
-TempFile::TempFile(std::filesystem::path target) : m_target(std::move(target)), m_temp(new_temp_path(m_target)) {}
+TempFile::TempFile(std::filesystem::path target)
+    : m_target(std::move(target)), m_temp(new_temp_path(m_target)) {}
 
 TempFile::~TempFile() {
     if (m_committed) return;

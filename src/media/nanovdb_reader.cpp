@@ -78,9 +78,10 @@ nanovdb::GridHandle<> read_typed(const std::string& where, const nanovdb::io::Gr
     // nodes only, so a flipped voxel value goes unnoticed: say so once per grid.
     const nanovdb::ChecksumMode mode = nanovdb::GridChecksum(g->checksum()).mode();
     if (mode != nanovdb::ChecksumMode::Full)
-        spdlog::warn("{}: {} carries {} checksum: corrupted voxel values cannot be detected (nerfpt bake writes a "
-                     "full one)",
-                     where, grid, mode == nanovdb::ChecksumMode::Partial ? "only a partial" : "no");
+        spdlog::warn(
+            "{}: {} carries {} checksum: corrupted voxel values cannot be detected (nerfpt bake writes a "
+            "full one)",
+            where, grid, mode == nanovdb::ChecksumMode::Partial ? "only a partial" : "no");
     return handle;
 }
 

@@ -92,7 +92,8 @@ VolumeGrid load_volume_grid(const std::filesystem::path& path, const GridLoadOpt
                         "' (expected .vdb, .nvdb or an instant-ngp {W}x{H}x{D}_*.bin)");
     } catch (const std::bad_alloc&) {
         // The dense box is at most k_max_dense_voxels (2^28 voxels, 4 GiB of density and colour).
-        throw Error(where + ": the grid's dense box (up to " + format_bytes(double(k_max_dense_voxels) * 16.0) +
+        throw Error(where + ": the grid's dense box (up to " +
+                    format_bytes(double(k_max_dense_voxels) * 16.0) +
                     ") needs more memory than this machine could allocate: bake it with a smaller --res");
     }
     sanitize(g);

@@ -16,9 +16,9 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/image_io.h"
 #include "core/json_file.h"
 #include "core/memory.h"
-#include "core/image_io.h"
 
 namespace npt::nerf {
 
@@ -93,8 +93,8 @@ Mat4 parse_matrix(const json& frame, const std::string& where) {
         }
     // A camera-to-world pose: affine (bottom row 0 0 0 1), with an invertible 3x3 part (columns of nonzero
     // length, not in one plane) and a position a float can hold. instant-ngp reads the matrix as it is.
-    const double bottom = std::abs(out.m[3][0]) + std::abs(out.m[3][1]) + std::abs(out.m[3][2]) +
-                          std::abs(out.m[3][3] - 1.0);
+    const double bottom =
+        std::abs(out.m[3][0]) + std::abs(out.m[3][1]) + std::abs(out.m[3][2]) + std::abs(out.m[3][3] - 1.0);
     if (!(bottom <= 1e-6))
         throw Error(where + ": 'transform_matrix' is not a pose: its last row must be [0, 0, 0, 1]");
     double norms = 1;
@@ -108,8 +108,8 @@ Mat4 parse_matrix(const json& frame, const std::string& where) {
 }
 
 // The lens must be invertible over the whole image: every pixel is undistorted (Newton, as the ray generator
-// does) and distorted back to within a hundredth of a pixel, on a 9x9 grid from corner to corner. Coefficients
-// such as k1 = 1e30 fold the image over itself; the ray of such a pixel would be meaningless.
+// does) and distorted back to within a hundredth of a pixel, on a 9x9 grid from corner to corner.
+// Coefficients such as k1 = 1e30 fold the image over itself; the ray of such a pixel would be meaningless.
 void check_lens(const Camera& c, const std::string& where) {
     const LensDistortion lens = c.distortion();
     if (lens.is_identity()) return;
@@ -123,10 +123,11 @@ void check_lens(const Camera& c, const std::string& where) {
             distort(lens, x, y, &xr, &yr);
             const double err = std::hypot((xr - xd) * c.fx, (yr - yd) * c.fy);
             if (!(err <= 0.01))
-                throw Error(fmt::format("{}: 'k1', 'k2', 'p1', 'p2' = {:g}, {:g}, {:g}, {:g} do not describe a lens "
-                                        "that can be inverted over the image (pixel ({:g}, {:g}) cannot be "
-                                        "undistorted)",
-                                        where, lens.k1, lens.k2, lens.p1, lens.p2, px, py));
+                throw Error(
+                    fmt::format("{}: 'k1', 'k2', 'p1', 'p2' = {:g}, {:g}, {:g}, {:g} do not describe a lens "
+                                "that can be inverted over the image (pixel ({:g}, {:g}) cannot be "
+                                "undistorted)",
+                                where, lens.k1, lens.k2, lens.p1, lens.p2, px, py));
         }
 }
 
@@ -180,7 +181,8 @@ Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, c
         ds.aabb_scale = float(*v);
     }
     if (auto v = opt_number(root, "scale", file)) {
-        // Positions are multiplied by it: 0 puts every camera at one point, a negative value mirrors the world.
+        // Positions are multiplied by it: 0 puts every camera at one point, a negative value mirrors the
+        // world.
         if (!(*v > 0) || !std::isfinite(float(*v)))
             throw Error(file + ": 'scale' must be a positive number, got " + json(*v).dump());
         ds.scale = float(*v);

@@ -66,8 +66,8 @@ Trainer::Trainer(NerfModel& model, const Dataset& data) try
         uint64_t(std::max(1.0, std::round(double(model.config.occupancy.update_interval) * stretch)));
 } catch (const std::bad_alloc&) {
     const double total = double(model.layout().total);
-    throw Error("training state (the model's " + std::to_string(size_t(total)) + " parameters, 5 copies) needs " +
-                format_bytes(total * 4.0 * 5.0) +
+    throw Error("training state (the model's " + std::to_string(size_t(total)) +
+                " parameters, 5 copies) needs " + format_bytes(total * 4.0 * 5.0) +
                 " of memory, more than this machine could allocate: lower encoding.log2_table_size or "
                 "encoding.levels in the config");
 }
@@ -257,9 +257,10 @@ StepStats Trainer::step() try {
     st.elapsed_seconds += stats.seconds;
     return stats;
 } catch (const std::bad_alloc&) {
-    throw Error("a training step of " + std::to_string(m_model.config.training.batch_samples) +
-                " samples needs more memory than this machine could allocate: lower training.batch_samples or "
-                "training.max_rays_per_batch in the config");
+    throw Error(
+        "a training step of " + std::to_string(m_model.config.training.batch_samples) +
+        " samples needs more memory than this machine could allocate: lower training.batch_samples or "
+        "training.max_rays_per_batch in the config");
 }
 
 void Trainer::update_occupancy(uint64_t step) {

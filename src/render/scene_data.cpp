@@ -46,8 +46,8 @@ CameraView make_camera_view(const scene::Scene& scene, int width, int height) {
     }
     // No camera: look at the scene's bounding box (meshes and volume cubes) down -Z from +Z, far enough to
     // frame it with a 40 degree field of view. Bounds in double: a box of float coordinates near the float
-    // limit has a diagonal no float can hold. Every scene shape must give a finite, valid view: empty, a point,
-    // a line, a flat one, a huge one, one far from the origin.
+    // limit has a diagonal no float can hold. Every scene shape must give a finite, valid view: empty, a
+    // point, a line, a flat one, a huge one, one far from the origin.
     c.right = Vec3(1, 0, 0);
     c.up = Vec3(0, 1, 0);
     c.forward = Vec3(0, 0, -1);
@@ -65,8 +65,8 @@ CameraView make_camera_view(const scene::Scene& scene, int width, int height) {
     for (const auto& v : scene.volumes)
         for (int corner = 0; corner < 8; ++corner)
             grow(v.local_to_world.transform_point(Vec3(corner & 1 ? v.local_max.x : v.local_min.x,
-                                                        corner & 2 ? v.local_max.y : v.local_min.y,
-                                                        corner & 4 ? v.local_max.z : v.local_min.z)));
+                                                       corner & 2 ? v.local_max.y : v.local_min.y,
+                                                       corner & 4 ? v.local_max.z : v.local_min.z)));
     if (!(lo[0] <= hi[0])) lo[0] = lo[1] = lo[2] = hi[0] = hi[1] = hi[2] = 0.0;
     double centre[3], diagonal2 = 0, far = 0;
     for (int k = 0; k < 3; ++k) {
@@ -76,8 +76,8 @@ CameraView make_camera_view(const scene::Scene& scene, int width, int height) {
     }
     // At least a millimetre, and enough float steps at the centre's magnitude that the camera does not sit
     // on it; at most what keeps the camera inside the world Embree accepts (scene::k_max_world_coordinate).
-    const double radius =
-        std::clamp(0.5 * std::sqrt(diagonal2), std::max(1e-3, 1e-5 * far), double(scene::k_max_world_coordinate));
+    const double radius = std::clamp(0.5 * std::sqrt(diagonal2), std::max(1e-3, 1e-5 * far),
+                                     double(scene::k_max_world_coordinate));
     const double distance = radius / double(c.tan_half_fov_y) * 1.1 + radius;
     c.position = Vec3(float(centre[0]), float(centre[1]), float(centre[2] + distance));
     return c;

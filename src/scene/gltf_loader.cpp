@@ -59,8 +59,8 @@ std::string json_text(const fs::path& path, bool binary) {
     if (u32(16) != 0x4E4F534Au) throw Error(file + ": GLB's first chunk is not JSON");
     const uint32_t length = u32(12);
     if (length == 0 || uint64_t(length) > size - 20)
-        throw Error(file + ": GLB JSON chunk of " + std::to_string(length) + " bytes does not fit the file (" +
-                    std::to_string(size) + " bytes)");
+        throw Error(file + ": GLB JSON chunk of " + std::to_string(length) +
+                    " bytes does not fit the file (" + std::to_string(size) + " bytes)");
     std::string text(length, '\0');
     if (!f.read(text.data(), std::streamsize(length))) throw Error(file + ": cannot read the GLB JSON chunk");
     return text;
@@ -117,14 +117,15 @@ Mat4 local_transform(const Context& ctx, const tinygltf::Node& n, const std::str
     if (n.translation.size() == 3)
         t = Mat4::translation(n.translation[0], n.translation[1], n.translation[2]);
     if (n.rotation.size() == 4) {
-        // The spec asks for a unit quaternion; exporters round. A zero one was refused by check_schema; others
-        // are normalised (as Blender does), with one warning per file when clearly not unit.
+        // The spec asks for a unit quaternion; exporters round. A zero one was refused by check_schema;
+        // others are normalised (as Blender does), with one warning per file when clearly not unit.
         const double norm = std::sqrt(n.rotation[0] * n.rotation[0] + n.rotation[1] * n.rotation[1] +
                                       n.rotation[2] * n.rotation[2] + n.rotation[3] * n.rotation[3]);
         if (std::abs(norm - 1.0) > 1e-3 && ctx.clamped.insert("rotation").second)
-            spdlog::warn("{}: node '{}': rotation quaternion has length {}, normalised (further ones in this file "
-                         "are not reported)",
-                         ctx.file, label, norm);
+            spdlog::warn(
+                "{}: node '{}': rotation quaternion has length {}, normalised (further ones in this file "
+                "are not reported)",
+                ctx.file, label, norm);
         r = Mat4::rotation_quat(n.rotation[0], n.rotation[1], n.rotation[2], n.rotation[3]);
     }
     if (n.scale.size() == 3) s = Mat4::scale(n.scale[0], n.scale[1], n.scale[2]);
@@ -262,10 +263,11 @@ class Flattener {
         } else {
             throw Error(m_ctx.file + ": light '" + l.name + "': unknown type '" + gl.type + "'");
         }
-        const Rgb color = gl.color.size() >= 3
-                              ? gltf::clamp_field(m_ctx, Rgb(float(gl.color[0]), float(gl.color[1]), float(gl.color[2])),
-                                                  0.0f, 1.0f, "KHR_lights_punctual.color", "light '" + l.name + "'")
-                              : Rgb(1.0f);
+        const Rgb color =
+            gl.color.size() >= 3
+                ? gltf::clamp_field(m_ctx, Rgb(float(gl.color[0]), float(gl.color[1]), float(gl.color[2])),
+                                    0.0f, 1.0f, "KHR_lights_punctual.color", "light '" + l.name + "'")
+                : Rgb(1.0f);
         l.intensity = color * float(gl.intensity);
         l.position = world.transform_point(Vec3(0.0f));
         const Vec3 d = world.transform_vector(Vec3(0, 0, -1));
@@ -275,7 +277,8 @@ class Flattener {
         if (!is_finite(l.direction))
             throw Error(m_ctx.file + ": node '" + label + "': light direction is not finite as a float");
         if (!is_finite(l.intensity))
-            throw Error(m_ctx.file + ": light '" + l.name + "': colour or intensity is not finite as a float");
+            throw Error(m_ctx.file + ": light '" + l.name +
+                        "': colour or intensity is not finite as a float");
         check_world_point(l.position, m_ctx.file + ": light '" + l.name + "' (node '" + label + "')",
                           "position");
         m_scene.lights.push_back(l);

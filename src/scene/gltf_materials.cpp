@@ -32,9 +32,10 @@ float clamp_field(const Context& ctx, float value, float lo, float hi, const std
     if (value >= lo && value <= hi) return value;
     const float clamped = value < lo ? lo : hi;
     if (ctx.clamped.insert(field).second)
-        spdlog::warn("{}: {}: {} {} is outside [{}, {}], clamped to {} (further clamps of {} in this file are "
-                     "not reported)",
-                     ctx.file, owner, field, value, lo, hi, clamped, field);
+        spdlog::warn(
+            "{}: {}: {} {} is outside [{}, {}], clamped to {} (further clamps of {} in this file are "
+            "not reported)",
+            ctx.file, owner, field, value, lo, hi, clamped, field);
     return clamped;
 }
 
@@ -57,12 +58,15 @@ MaterialTable::MaterialTable(const Context& ctx, Scene& scene) : m_ctx(ctx), m_s
         // Factors the spec bounds are clamped as Blender does, one warning per field (types and the other
         // ranges were checked by check_schema); docs/formats.md, "glTF 2.0", lists the rule per field.
         const std::string owner = "material '" + mname + "'";
-        const auto unit = [&](double v, const char* field) { return clamp_field(ctx, float(v), 0.0f, 1.0f, field, owner); };
+        const auto unit = [&](double v, const char* field) {
+            return clamp_field(ctx, float(v), 0.0f, 1.0f, field, owner);
+        };
         mat.base_color = clamp_field(ctx, rgb(pbr.baseColorFactor, Rgb(1.0f)), 0.0f, 1.0f,
                                      "pbrMetallicRoughness.baseColorFactor", owner);
         mat.metallic = unit(pbr.metallicFactor, "pbrMetallicRoughness.metallicFactor");
         mat.roughness = unit(pbr.roughnessFactor, "pbrMetallicRoughness.roughnessFactor");
-        mat.emission = clamp_field(ctx, rgb(gm.emissiveFactor, Rgb(0.0f)), 0.0f, 1.0f, "emissiveFactor", owner);
+        mat.emission =
+            clamp_field(ctx, rgb(gm.emissiveFactor, Rgb(0.0f)), 0.0f, 1.0f, "emissiveFactor", owner);
         if (auto* e = extension(gm, "KHR_materials_emissive_strength"))
             mat.emission *= float(number(*e, "emissiveStrength", 1.0));
         if (auto* e = extension(gm, "KHR_materials_specular")) {

@@ -60,13 +60,12 @@ std::string number_text(double v) {
 struct Range {
     double lo = -INFINITY, hi = INFINITY;
     bool lo_open = false, hi_open = false;
-    bool contains(double v) const {
-        return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
-    }
+    bool contains(double v) const { return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi); }
     std::string text() const {
         if (std::isinf(hi)) return std::string(lo_open ? "> " : ">= ") + number_text(lo);
         if (std::isinf(lo)) return std::string(hi_open ? "< " : "<= ") + number_text(hi);
-        return std::string(lo_open ? "(" : "[") + number_text(lo) + ", " + number_text(hi) + (hi_open ? ")" : "]");
+        return std::string(lo_open ? "(" : "[") + number_text(lo) + ", " + number_text(hi) +
+               (hi_open ? ")" : "]");
     }
 };
 constexpr Range k_any{};
@@ -130,8 +129,7 @@ class Checker {
         auto it = obj.find(key);
         if (it == obj.end()) return nullptr;
         const bool ok = type == json::value_t::number_float ? it->is_number() : it->type() == type;
-        if (!ok)
-            fail(join(path, key), std::string("expected ") + kind(json(type)) + ", got " + kind(*it));
+        if (!ok) fail(join(path, key), std::string("expected ") + kind(json(type)) + ", got " + kind(*it));
         return &*it;
     }
     void required(const json& obj, const char* key, const std::string& path) const {
@@ -160,12 +158,14 @@ class Checker {
         if (!v) return std::nullopt;
         const double d = v->get<double>();
         if (!std::isfinite(d)) fail(join(path, key), "is not finite");
-        if (!range.contains(d)) fail(join(path, key), number_text(d) + " is out of range: must be " + range.text());
+        if (!range.contains(d))
+            fail(join(path, key), number_text(d) + " is out of range: must be " + range.text());
         return d;
     }
     bool is_integer(const json& v) const {
         if (v.is_number_integer()) return true;
-        return v.is_number_float() && std::isfinite(v.get<double>()) && v.get<double>() == std::floor(v.get<double>());
+        return v.is_number_float() && std::isfinite(v.get<double>()) &&
+               v.get<double>() == std::floor(v.get<double>());
     }
     std::optional<double> integer(const json& obj, const char* key, const std::string& path, double lo,
                                   double hi) const {
@@ -217,8 +217,8 @@ class Checker {
     const json* numbers(const json& obj, const char* key, const std::string& path, size_t n) const {
         auto it = obj.find(key);
         if (it == obj.end()) return nullptr;
-        const std::string expect =
-            n ? fmt::format("expected an array of {} numbers", n) : std::string("expected an array of numbers");
+        const std::string expect = n ? fmt::format("expected an array of {} numbers", n)
+                                     : std::string("expected an array of numbers");
         if (!it->is_array()) fail(join(path, key), expect + ", got " + kind(*it));
         if (n && it->size() != n)
             fail(join(path, key), expect + ", got " + std::to_string(it->size()) + " elements");
@@ -252,11 +252,14 @@ class Checker {
         if (const json* q = numbers(n, "rotation", p, 4)) {
             double norm2 = 0;
             for (const json& c : *q) norm2 += c.get<double>() * c.get<double>();
-            // A zero quaternion has no rotation to normalise to (a non-unit one is normalised, as Blender does).
-            if (!(norm2 > 1e-12)) fail(join(p, "rotation"), "the quaternion [x, y, z, w] is zero: no rotation");
+            // A zero quaternion has no rotation to normalise to (a non-unit one is normalised, as Blender
+            // does).
+            if (!(norm2 > 1e-12))
+                fail(join(p, "rotation"), "the quaternion [x, y, z, w] is zero: no rotation");
         }
         if (const json* ext = opt(n, "extensions", p, json::value_t::object))
-            if (const json* lp = opt(*ext, "KHR_lights_punctual", join(p, "extensions"), json::value_t::object)) {
+            if (const json* lp =
+                    opt(*ext, "KHR_lights_punctual", join(p, "extensions"), json::value_t::object)) {
                 const std::string lpp = join(p, "extensions.KHR_lights_punctual");
                 required(*lp, "light", lpp);
                 check_id((*lp)["light"], join(lpp, "light"), "extensions.KHR_lights_punctual.lights",
@@ -299,8 +302,9 @@ class Checker {
         required(a, "componentType", p);
         const double ct = *integer(a, "componentType", p, 0, 1e9);
         if (ct != 5120 && ct != 5121 && ct != 5122 && ct != 5123 && ct != 5125 && ct != 5126)
-            fail(join(p, "componentType"), number_text(ct) + " is not a glTF component type (5120, 5121, 5122, "
-                                                             "5123, 5125 or 5126)");
+            fail(join(p, "componentType"), number_text(ct) +
+                                               " is not a glTF component type (5120, 5121, 5122, "
+                                               "5123, 5125 or 5126)");
         boolean(a, "normalized", p);
         required(a, "count", p);
         integer(a, "count", p, 1, 1e18);
@@ -385,7 +389,8 @@ class Checker {
             number(*per, "aspectRatio", pp, k_positive);
             const auto znear = number(*per, "znear", pp, k_positive);
             if (const auto zfar = number(*per, "zfar", pp, k_positive); zfar && znear && !(*zfar > *znear))
-                fail(join(pp, "zfar"), number_text(*zfar) + " must exceed znear (" + number_text(*znear) + ")");
+                fail(join(pp, "zfar"),
+                     number_text(*zfar) + " must exceed znear (" + number_text(*znear) + ")");
         } else if (const json* o = opt(c, "orthographic", p, json::value_t::object)) {
             const std::string op = join(p, "orthographic");
             for (const char* k : {"xmag", "ymag", "znear", "zfar"}) number(*o, k, op);
@@ -401,12 +406,13 @@ class Checker {
         number(l, "range", p, k_positive);
         if (const json* s = opt(l, "spot", p, json::value_t::object)) {
             const std::string sp = join(p, "spot");
-            const double inner = number(*s, "innerConeAngle", sp, Range{0.0, k_pi / 2, false, true}).value_or(0.0);
+            const double inner =
+                number(*s, "innerConeAngle", sp, Range{0.0, k_pi / 2, false, true}).value_or(0.0);
             const double outer =
                 number(*s, "outerConeAngle", sp, Range{0.0, k_pi / 2, true, false}).value_or(k_pi / 4);
             if (!(inner < outer))
-                fail(join(sp, "innerConeAngle"), number_text(inner) + " must be below outerConeAngle (" +
-                                                     number_text(outer) + ")");
+                fail(join(sp, "innerConeAngle"),
+                     number_text(inner) + " must be below outerConeAngle (" + number_text(outer) + ")");
         }
     }
 

@@ -9,8 +9,8 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "core/json_file.h"
 #include "core/image_io.h"
+#include "core/json_file.h"
 #include "scene/gltf_loader.h"
 #include "scene/mesh_utils.h"
 #include "scene/obj_loader.h"

@@ -48,8 +48,8 @@ void generate_smooth_normals(Mesh& mesh) {
 namespace {
 
 bool within_world(Vec3 p) {
-    return is_finite(p) && std::abs(p.x) <= k_max_world_coordinate && std::abs(p.y) <= k_max_world_coordinate &&
-           std::abs(p.z) <= k_max_world_coordinate;
+    return is_finite(p) && std::abs(p.x) <= k_max_world_coordinate &&
+           std::abs(p.y) <= k_max_world_coordinate && std::abs(p.z) <= k_max_world_coordinate;
 }
 
 std::string world_problem(Vec3 p) {

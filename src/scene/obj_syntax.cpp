@@ -87,7 +87,8 @@ using Counts = std::array<int64_t, 3>;
 constexpr const char* k_element_names[3] = {"vertices", "texture coordinates", "normals"};
 
 // Checks one OBJ index against the elements defined before it (negative) or in the whole file (positive).
-void check_index(std::string_view s, int kind, const Counts& before, const Counts& total, const LineError& fail) {
+void check_index(std::string_view s, int kind, const Counts& before, const Counts& total,
+                 const LineError& fail) {
     const std::string name = k_element_names[kind];
     const std::string text(s);  // a named string: "..." + std::string(...) trips GCC 12's -Wrestrict
     if (s.empty()) fail("empty index (expected v, v/vt, v//vn or v/vt/vn)");
@@ -103,7 +104,8 @@ void check_index(std::string_view s, int kind, const Counts& before, const Count
     if (v > 0 && v > have)
         fail("index " + text + " is out of range (the file has " + std::to_string(have) + " " + name + ")");
     if (v < 0 && -v > have)
-        fail("relative index " + text + " is out of range (" + std::to_string(have) + " " + name + " before it)");
+        fail("relative index " + text + " is out of range (" + std::to_string(have) + " " + name +
+             " before it)");
 }
 
 }  // namespace
@@ -130,7 +132,8 @@ std::vector<std::string> check_obj_text(std::string_view text, const std::string
             ++before[2];
         } else if (t[0] == "f" || t[0] == "l" || t[0] == "p") {
             const size_t min = t[0] == "f" ? 3 : t[0] == "l" ? 2 : 1;
-            if (t.size() - 1 < min) fail(fmt::format("expected at least {} vertices, got {}", min, t.size() - 1));
+            if (t.size() - 1 < min)
+                fail(fmt::format("expected at least {} vertices, got {}", min, t.size() - 1));
             for (size_t i = 1; i < t.size(); ++i) {
                 // v, v/vt, v//vn or v/vt/vn
                 const std::string_view corner = t[i];

@@ -16,8 +16,8 @@ namespace npt::scene {
 // those before it). Returns the file names of its `mtllib` statements.
 std::vector<std::string> check_obj_text(std::string_view text, const std::string& file);
 
-// Throws npt::Error "FILE: line N: KEY: ..." when a numeric MTL statement we read (Ka, Kd, Ks, Ke, Kt, Tf, Ns,
-// Ni, d, Tr, illum) has a malformed or non-finite number.
+// Throws npt::Error "FILE: line N: KEY: ..." when a numeric MTL statement we read (Ka, Kd, Ks, Ke, Kt, Tf,
+// Ns, Ni, d, Tr, illum) has a malformed or non-finite number.
 void check_mtl_text(std::string_view text, const std::string& file);
 
 }  // namespace npt::scene

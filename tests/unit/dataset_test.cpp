@@ -325,16 +325,19 @@ TEST(Dataset, BadPosesScaleAndLens) {
     auto load = [](const fs::path& p) { return [p] { load_dataset(p, ""); }; };
 
     write_one_frame(dir / "zero", "", "[[0,0,0,0],[0,0,0,0],[0,0,0,0],[0,0,0,0]]");
-    test::expect_error_message(load(dir / "zero"), {"transforms.json", "frame 0", "'transform_matrix'", "last row"});
+    test::expect_error_message(load(dir / "zero"),
+                               {"transforms.json", "frame 0", "'transform_matrix'", "last row"});
     write_one_frame(dir / "zero3", "", "[[0,0,0,1],[0,0,0,2],[0,0,0,3],[0,0,0,1]]");
     test::expect_error_message(load(dir / "zero3"), {"transforms.json", "frame 0", "not invertible"});
     write_one_frame(dir / "flat", "", "[[1,0,1,0],[0,1,0,0],[0,0,0,0],[0,0,0,1]]");  // z axis = x axis
     test::expect_error_message(load(dir / "flat"), {"transforms.json", "frame 0", "not invertible"});
     write_one_frame(dir / "far", "", "[[1,0,0,1e300],[0,1,0,0],[0,0,1,0],[0,0,0,1]]");
-    test::expect_error_message(load(dir / "far"), {"transforms.json", "frame 0", "beyond the range of a float"});
+    test::expect_error_message(load(dir / "far"),
+                               {"transforms.json", "frame 0", "beyond the range of a float"});
 
     write_one_frame(dir / "scale0", "", k_identity, "\"fl_x\": 5, \"scale\": 0,");
-    test::expect_error_message(load(dir / "scale0"), {"transforms.json", "'scale' must be a positive number"});
+    test::expect_error_message(load(dir / "scale0"),
+                               {"transforms.json", "'scale' must be a positive number"});
     write_one_frame(dir / "scaleneg", "", k_identity, "\"fl_x\": 5, \"scale\": -0.33,");
     test::expect_error_message(load(dir / "scaleneg"), {"transforms.json", "'scale'"});
     write_one_frame(dir / "aabb", "", k_identity, "\"fl_x\": 5, \"aabb_scale\": 1e9,");
@@ -343,7 +346,8 @@ TEST(Dataset, BadPosesScaleAndLens) {
     test::expect_error_message(load(dir / "fl"), {"transforms.json", "frame 0", "do not fit a float"});
 
     write_one_frame(dir / "k1", "", k_identity, "\"fl_x\": 5, \"k1\": 1e30,");
-    test::expect_error_message(load(dir / "k1"), {"transforms.json", "frame 0", "'k1'", "1e+30", "cannot be undistorted"});
+    test::expect_error_message(load(dir / "k1"),
+                               {"transforms.json", "frame 0", "'k1'", "1e+30", "cannot be undistorted"});
     write_one_frame(dir / "k1big", "\"k1\": 1e39, ", k_identity);
     test::expect_error_message(load(dir / "k1big"), {"transforms.json", "frame 0", "must fit a float"});
     // A strong but plausible lens (a wide phone camera) still loads.

@@ -291,20 +291,28 @@ TEST_F(EvalViewCli, NoCommandWritesOverItsInputs) {
 
     EXPECT_EQ(run_cli({"train", test_json().string(), "-o", test_json().string(), "--force", "-q"}, log), 1);
     EXPECT_NE(slurp(log).find("is the input DATA"), std::string::npos) << slurp(log);
-    EXPECT_EQ(run_cli({"train", test_dir.string(), "--split", "", "-o", inputs[1].string(), "--force", "-q"}, log), 1);
+    EXPECT_EQ(
+        run_cli({"train", test_dir.string(), "--split", "", "-o", inputs[1].string(), "--force", "-q"}, log),
+        1);
     EXPECT_NE(slurp(log).find("is the input DATA's image of frame"), std::string::npos) << slurp(log);
     EXPECT_EQ(run_cli({"eval", model, test_json().string(), "-o", test_dir.string(), "-q"}, log), 1);
     EXPECT_NE(slurp(log).find("is the input DATA's image of frame 0"), std::string::npos) << slurp(log);
-    EXPECT_EQ(run_cli({"view", model, "-o", inputs[1].string(), "--camera", test_json().string() + ":0", "-q"}, log),
-              1);
+    EXPECT_EQ(
+        run_cli({"view", model, "-o", inputs[1].string(), "--camera", test_json().string() + ":0", "-q"},
+                log),
+        1);
     EXPECT_NE(slurp(log).find("is the input DATA's image"), std::string::npos) << slurp(log);
     fs::copy_file(model, dir() / "model.vdb");  // a model file under a grid's name: bake it over itself
-    EXPECT_EQ(run_cli({"bake", (dir() / "model.vdb").string(), "-o", (dir() / "model.vdb").string(), "-q"}, log), 1);
+    EXPECT_EQ(
+        run_cli({"bake", (dir() / "model.vdb").string(), "-o", (dir() / "model.vdb").string(), "-q"}, log),
+        1);
     EXPECT_NE(slurp(log).find("is the input MODEL"), std::string::npos) << slurp(log);
     for (size_t i = 0; i < inputs.size(); ++i) EXPECT_EQ(slurp(inputs[i]), before[i]) << inputs[i];
     EXPECT_FALSE(fs::exists(test_dir / "metrics.json"));
     // NaN is not a number of seconds: a usage error, no 0-step model.
-    EXPECT_EQ(run_cli({"train", test_json().string(), "-o", (dir() / "nan.npt").string(), "--time", "nan"}, log), 2);
+    EXPECT_EQ(
+        run_cli({"train", test_json().string(), "-o", (dir() / "nan.npt").string(), "--time", "nan"}, log),
+        2);
     EXPECT_FALSE(fs::exists(dir() / "nan.npt"));
 }
 

@@ -543,7 +543,8 @@ TEST(GltfLoaderBadInput, WrongTypesAreErrors) {
         {[](Builder& b) { b.j["nodes"][0]["mesh"] = 1.5; }, {"nodes[0].mesh", "1.5"}},
         {[](Builder& b) { b.j["accessors"][0]["type"] = "VEC9"; }, {"accessors[0].type", "'VEC9'"}},
         {[](Builder& b) { b.j["nodes"][0]["name"] = json::array(); }, {"nodes[0].name", "a string"}},
-        {[](Builder& b) { b.j["meshes"][0]["primitives"] = json::array(); }, {"meshes[0].primitives", "empty"}},
+        {[](Builder& b) { b.j["meshes"][0]["primitives"] = json::array(); },
+         {"meshes[0].primitives", "empty"}},
     };
     for (const Case& c : cases) {
         Builder b;
@@ -556,7 +557,8 @@ TEST(GltfLoaderBadInput, WrongTypesAreErrors) {
             ADD_FAILURE() << "no error for " << c.parts[0];
         } catch (const Error& e) {
             for (const auto& part : parts)
-                EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what() << " lacks " << part;
+                EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
+                    << e.what() << " lacks " << part;
         }
     }
 }
@@ -566,7 +568,8 @@ TEST(GltfLoaderBadInput, WrongTypesAreErrors) {
 TEST(GltfLoaderBadInput, OutOfRangeValues) {
     const auto material = [](json ext, json pbr = json::object()) {
         Builder b;
-        b.j["materials"] = json::array({{{"name", "mat"}, {"extensions", ext}, {"pbrMetallicRoughness", pbr}}});
+        b.j["materials"] =
+            json::array({{{"name", "mat"}, {"extensions", ext}, {"pbrMetallicRoughness", pbr}}});
         b.node({{"mesh", b.triangle(0)}});
         return b;
     };
@@ -576,8 +579,9 @@ TEST(GltfLoaderBadInput, OutOfRangeValues) {
                  {"scene.gltf", "emissiveStrength", "-100", ">= 0"});
     {
         Builder b;
-        b.j["cameras"] = json::array(
-            {{{"type", "perspective"}, {"perspective", {{"yfov", 0.5}, {"znear", 0.1}, {"aspectRatio", -2}}}}});
+        b.j["cameras"] =
+            json::array({{{"type", "perspective"},
+                          {"perspective", {{"yfov", 0.5}, {"znear", 0.1}, {"aspectRatio", -2}}}}});
         b.node({{"camera", 0}});
         b.node({{"mesh", b.triangle()}});
         expect_error(b.write(), {"scene.gltf", "cameras[0].perspective.aspectRatio", "-2", "> 0"});
@@ -589,7 +593,8 @@ TEST(GltfLoaderBadInput, OutOfRangeValues) {
     }
     {
         Builder b;
-        b.j["extensions"]["KHR_lights_punctual"]["lights"] = json::array({{{"type", "point"}, {"intensity", -5}}});
+        b.j["extensions"]["KHR_lights_punctual"]["lights"] =
+            json::array({{{"type", "point"}, {"intensity", -5}}});
         b.node({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
         b.node({{"mesh", b.triangle()}});
         expect_error(b.write(), {"scene.gltf", "KHR_lights_punctual.lights[0].intensity", "-5"});
@@ -607,7 +612,8 @@ TEST(GltfLoaderBadInput, OutOfRangeValues) {
     EXPECT_EQ(s.materials[1].roughness, 1.0f);
     // roughnessFactor twice (two materials) and transmissionFactor once: one warning per field.
     EXPECT_EQ(log.warnings(), 2) << log.text();
-    EXPECT_NE(log.text().find("roughnessFactor -3 is outside [0, 1], clamped to 0"), std::string::npos) << log.text();
+    EXPECT_NE(log.text().find("roughnessFactor -3 is outside [0, 1], clamped to 0"), std::string::npos)
+        << log.text();
 }
 
 // The finiteness check runs on world-space data: finite local positions and a finite matrix can still
@@ -618,7 +624,9 @@ TEST(GltfLoaderBadInput, TransformsOverflowingWorldSpace) {
         const int p = b.vec3({1, 0, 0, 2, 0, 0, 1, 1, 0});
         const int mesh = b.mesh({{"POSITION", p}}, b.indices32({0, 1, 2}), -1, "tri");
         // x' = 3e38 x + 3e38: finite in double, beyond a float.
-        b.node({{"name", "big"}, {"mesh", mesh}, {"matrix", {3e38, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 3e38, 0, 0, 1}}});
+        b.node({{"name", "big"},
+                {"mesh", mesh},
+                {"matrix", {3e38, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 3e38, 0, 0, 1}}});
         expect_error(b.write(), {"scene.gltf", "mesh 'tri'", "position 0", "not finite in world space"});
     }
     {
@@ -628,7 +636,8 @@ TEST(GltfLoaderBadInput, TransformsOverflowingWorldSpace) {
     }
     {
         Builder b;
-        b.j["cameras"] = json::array({{{"type", "perspective"}, {"perspective", {{"yfov", 0.5}, {"znear", 0.1}}}}});
+        b.j["cameras"] =
+            json::array({{{"type", "perspective"}, {"perspective", {{"yfov", 0.5}, {"znear", 0.1}}}}});
         b.node({{"name", "cam"}, {"camera", 0}, {"translation", {1e30, 0, 0}}});
         b.node({{"mesh", b.triangle()}});
         expect_error(b.write(), {"scene.gltf", "camera 'cam'", "position", "beyond"});

@@ -27,13 +27,15 @@ TEST(JsonFile, DepthIsBoundedWithoutRecursion) {
     test::expect_error_message([&] { check_json_depth(objects, "o.json"); }, {"o.json", "nested deeper"});
     const std::string in_string = "[\"" + std::string(1000, '[') + "\\\"" + std::string(1000, '{') + "\"]";
     EXPECT_NO_THROW(parse_json_text(in_string, "s.json"));
-    const std::string in_comment = "// " + std::string(1000, '[') + "\n/* " + std::string(1000, '{') + " */ [1]";
+    const std::string in_comment =
+        "// " + std::string(1000, '[') + "\n/* " + std::string(1000, '{') + " */ [1]";
     EXPECT_NO_THROW(parse_json_text(in_comment, "c.json", /*comments=*/true));
 }
 
 TEST(JsonFile, ErrorsNameTheFileAndThePlace) {
-    test::expect_error_message([] { parse_json_text("{\n  \"a\": 1e400\n}", "big.json"); },
-                               {"big.json", "not valid JSON", "number overflow", "1e400", "line 2, column 8"});
+    test::expect_error_message(
+        [] { parse_json_text("{\n  \"a\": 1e400\n}", "big.json"); },
+        {"big.json", "not valid JSON", "number overflow", "1e400", "line 2, column 8"});
     test::expect_error_message([] { parse_json_text("{\"a\": [1, 2}", "bad.json"); },
                                {"bad.json", "not valid JSON", "line 1"});
     const auto dir = test::temp_dir();
@@ -46,7 +48,7 @@ TEST(JsonFile, ErrorsNameTheFileAndThePlace) {
 
 std::vector<uint8_t> nested_msgpack(size_t depth, uint8_t open) {
     std::vector<uint8_t> b(depth, open);  // fixarray/fixmap of one element, nested
-    b.push_back(0xc0);                     // nil at the bottom (a fixmap would need a key and a value)
+    b.push_back(0xc0);                    // nil at the bottom (a fixmap would need a key and a value)
     return b;
 }
 

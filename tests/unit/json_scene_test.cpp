@@ -156,8 +156,10 @@ TEST(JsonSceneBadInput, WrongTypesAndMissingFiles) {
         {R"({"background": [0, 1e300, 0]})", {"background", "range of a float"}},
         {R"({"camera": {"position": [0, 1, 4], "look_at": [0, 1, 0], "aspect": -2}})", {"camera.aspect"}},
         {R"({"camera": {"position": [1e30, 1, 4], "look_at": [0, 1, 0]}})", {"camera", "position", "beyond"}},
-        {R"({"include": [{"file": "tri.obj", "scale": [1e30, 1e30, 1e30]}]})", {"tri.obj", "beyond", "world space"}},
-        {R"({"volumes": [{"file": "x.bin", "scale": [1e30, 1, 1]}]})", {"volumes[0]", "cube corner", "beyond"}},
+        {R"({"include": [{"file": "tri.obj", "scale": [1e30, 1e30, 1e30]}]})",
+         {"tri.obj", "beyond", "world space"}},
+        {R"({"volumes": [{"file": "x.bin", "scale": [1e30, 1, 1]}]})",
+         {"volumes[0]", "cube corner", "beyond"}},
         {R"({"a": )" + std::string(1000, '[') + "]}", {"nested deeper"}},
         {R"({"render": {"seed": 1e400}})", {"not valid JSON", "1e400", "line 1"}},
     };

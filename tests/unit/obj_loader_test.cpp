@@ -138,7 +138,9 @@ TEST(ObjLoaderBadInput, NonFiniteNumbersAndBadIndices) {
         {"comma", "v 0 0 0\nv 1,5 0 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "'1,5'"}},
         {"short", "v 0 0\n", {"line 1", "expected 3 to 7 numbers, got 2"}},
         {"vn", tri + "vn 0 0 nan\nf 1//1 2//1 3//1\n", {"line 4", "vn:"}},
-        {"uv_range", tri + "vt 0 0\nf 1/1 2/1 3/9\n", {"line 5", "f:", "index 9 is out of range", "1 texture coordinates"}},
+        {"uv_range",
+         tri + "vt 0 0\nf 1/1 2/1 3/9\n",
+         {"line 5", "f:", "index 9 is out of range", "1 texture coordinates"}},
         {"uv_relative", tri + "vt 0 0\nf 1/-1 2/-1 3/-2\n", {"line 5", "relative index -2"}},
         {"normal_range", tri + "f 1//1 2//1 3//1\n", {"line 4", "0 normals"}},
         {"vertex_range", tri + "f 1 2 4\n", {"line 4", "index 4 is out of range (the file has 3 vertices)"}},
@@ -158,12 +160,14 @@ TEST(ObjLoaderBadInput, NonFiniteNumbersAndBadIndices) {
             ADD_FAILURE() << "no error for " << c.name;
         } catch (const Error& e) {
             for (const auto& part : c.parts)
-                EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what() << " lacks " << part;
+                EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
+                    << e.what() << " lacks " << part;
         }
     }
     // Valid forms still load: relative indices, v/vt/vn, a w coordinate, vertex colours, comments.
-    test::write_file(dir / "ok.obj", "v 0 0 0 1\nv 1 0 0 0.5 0.5 0.5\nv +0 1 0 # top\nvt 0 0\nvn 0 0 1\n"
-                                     "f -3/1/1 -2/1/1 -1/1/1\n");
+    test::write_file(dir / "ok.obj",
+                     "v 0 0 0 1\nv 1 0 0 0.5 0.5 0.5\nv +0 1 0 # top\nvt 0 0\nvn 0 0 1\n"
+                     "f -3/1/1 -2/1/1 -1/1/1\n");
     const Scene s = load_scene(dir / "ok.obj");
     EXPECT_EQ(s.triangle_count(), 1u);
 }

@@ -21,7 +21,8 @@ scene::Scene scene_of(std::vector<Vec3> positions) {
     scene::Mesh m;
     m.name = "m";
     m.positions = std::move(positions);
-    for (uint32_t i = 0; i + 2 < m.positions.size(); i += 3) m.indices.insert(m.indices.end(), {i, i + 1, i + 2});
+    for (uint32_t i = 0; i + 2 < m.positions.size(); i += 3)
+        m.indices.insert(m.indices.end(), {i, i + 1, i + 2});
     s.meshes.push_back(m);
     return s;
 }

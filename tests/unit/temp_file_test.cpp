@@ -30,11 +30,11 @@ TEST(TempFile, StaleTemporariesOfDeadProcessesAreRemoved) {
     const std::string dead = std::to_string(dead_pid()), alive = std::to_string(getppid());
     const std::vector<std::string> stale = {"model.npt.tmp-" + dead, "model.npt.tmp-" + dead + "-123456"};
     const std::vector<std::string> kept = {
-        "model.npt.tmp-" + alive,       // a live process: another writer of the same file
+        "model.npt.tmp-" + alive,  // a live process: another writer of the same file
         "model.npt.tmp-" + alive + "-7",
-        "model.npt.tmpfoo",             // not our form
-        "model.npt.tmp-12x",            // not a pid
-        "other.npt.tmp-" + dead,        // another file's
+        "model.npt.tmpfoo",       // not our form
+        "model.npt.tmp-12x",      // not a pid
+        "other.npt.tmp-" + dead,  // another file's
         "model.npt",
     };
     for (const auto& n : stale) test::write_file(dir / n, "x");

@@ -35,7 +35,8 @@ void write_grids(const fs::path& path, const openvdb::GridPtrVec& grids, Format 
     }
     std::vector<nanovdb::GridHandle<>> handles;
     for (const auto& g : grids)
-        handles.push_back(nanovdb::openToNanoVDB(g, nanovdb::StatsMode::Default, nanovdb::ChecksumMode::Full));
+        handles.push_back(
+            nanovdb::openToNanoVDB(g, nanovdb::StatsMode::Default, nanovdb::ChecksumMode::Full));
     nanovdb::io::writeGrids(path.string(), handles);
 }
 
