@@ -1,5 +1,5 @@
 // NeRF configs (nerf/nerf_config.h): `nerfpt train --config`, and the copy stored in every model file.
-#include "fuzz_support.h"
+#include "harness_support.h"
 #include "nerf/nerf_config.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

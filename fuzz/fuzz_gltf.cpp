@@ -1,7 +1,7 @@
 // glTF 2.0 and GLB (scene/gltf_loader.h), through load_scene as `nerfpt render` reads a scene.
 #include <cstring>
 
-#include "fuzz_support.h"
+#include "harness_support.h"
 #include "scene/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -3,7 +3,7 @@
 #include <cstring>
 
 #include "core/image_io.h"
-#include "fuzz_support.h"
+#include "harness_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     using namespace npt;

@@ -1,6 +1,6 @@
 // Our JSON scene format (scene/json_scene.h). The scratch folder holds tri.obj and cam.gltf for it to
 // include.
-#include "fuzz_support.h"
+#include "harness_support.h"
 #include "scene/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

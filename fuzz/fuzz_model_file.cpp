@@ -4,7 +4,7 @@
 #include <cstring>
 #include <vector>
 
-#include "fuzz_support.h"
+#include "harness_support.h"
 #include "nerf/model_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,7 +1,7 @@
 // instant-ngp snapshots (.msgpack, gzip/zlib .ingp; nerf/ngp_snapshot.h), from memory.
 #include <vector>
 
-#include "fuzz_support.h"
+#include "harness_support.h"
 #include "nerf/ngp_snapshot.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -2,7 +2,7 @@
 // and the text of in.mtl (which the OBJ names with "mtllib in.mtl").
 #include <string_view>
 
-#include "fuzz_support.h"
+#include "harness_support.h"
 #include "scene/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -2,7 +2,7 @@
 // frames.
 #include "core/image.h"
 #include "core/image_io.h"
-#include "fuzz_support.h"
+#include "harness_support.h"
 #include "nerf/dataset.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

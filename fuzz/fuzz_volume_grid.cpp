@@ -2,7 +2,7 @@
 // raw grid whose size W, H, D (1..255) are the next three bytes; the rest is the file.
 #include <string>
 
-#include "fuzz_support.h"
+#include "harness_support.h"
 #include "media/volume_grid.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -63,9 +63,11 @@ class Reader {
     }
     void check_keys(const json& obj, const std::string& field,
                     std::initializer_list<const char*> known) const {
-        for (const auto& [key, value] : obj.items())
+        for (const auto& item : obj.items()) {
+            const std::string& key = item.key();  // clang 14 cannot capture a structured binding
             if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
                 spdlog::warn("{}: {}{}: unknown key, ignored", m_file, field.empty() ? "" : field + ".", key);
+        }
     }
     const std::string& file() const { return m_file; }
 
