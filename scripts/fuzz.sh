@@ -93,8 +93,9 @@ for t in "${targets[@]}"; do
     bin="$build/fuzz/fuzz_$t"
     [[ -x "$bin" ]] || { echo "fuzz: unknown target '$t' (${all[*]})" >&2; exit 2; }
     echo "fuzz: $t for ${seconds}s"
-    # -rss_limit_mb: a loader that asks for gigabytes on a small input is a finding too.
-    if ! (cd "$build/fuzz" && "./fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=25 \
+    # Memory: our largest documented allocation from a small file is a 2^28-voxel dense grid (4 GiB); more is a
+    # finding.
+    if ! (cd "$build/fuzz" && "./fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=6144 -malloc_limit_mb=5120 -timeout=25 \
         -max_len=1048576 -print_final_stats=1 "corpus/$t" "seeds/$t" 2>"fuzz_$t.log"); then
         echo "fuzz: $t FOUND A PROBLEM: see $build/fuzz/fuzz_$t.log and $build/fuzz/crash-*" >&2
         tail -n 40 "$build/fuzz/fuzz_$t.log" >&2

@@ -153,6 +153,8 @@ std::vector<unsigned char> read_bytes(const fs::path& path) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw Error(path.string() + ": file not found");
     if (fs::is_directory(path, ec)) throw Error(path.string() + ": is a folder, not an image");
+    // A FIFO or a device (a texture named /dev/stdin) would block or never end.
+    if (!fs::is_regular_file(path, ec)) throw Error(path.string() + ": not a regular file");
     std::ifstream f(path, std::ios::binary);
     if (!f) throw Error(path.string() + ": cannot open");
     return std::vector<unsigned char>(std::istreambuf_iterator<char>(f), {});

@@ -66,6 +66,17 @@ std::string json_text(const fs::path& path, bool binary) {
     return text;
 }
 
+// Buffers and images a glTF names by URI are read only from regular files: a URI naming /dev/stdin or a FIFO
+// would block forever, /dev/zero never ends.
+bool read_regular_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) {
+        if (err) *err += "File is not a regular file: " + path + "\n";
+        return false;
+    }
+    return tinygltf::ReadWholeFile(out, err, path, nullptr);
+}
+
 tinygltf::Model parse(const fs::path& path) {
     const std::string file = path.string();
     std::error_code ec;
@@ -73,6 +84,8 @@ tinygltf::Model parse(const fs::path& path) {
     if (fs::file_size(path, ec) == 0) throw Error(file + ": file is empty");
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&keep_encoded_image, nullptr);
+    loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_regular_file,
+                           &tinygltf::WriteWholeFile, nullptr});
     loader.SetStoreOriginalJSONForExtrasAndExtensions(true);
     tinygltf::Model model;
     std::string err, warn;

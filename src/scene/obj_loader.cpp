@@ -78,7 +78,8 @@ void load_obj(const fs::path& path, Scene& scene, const Mat4& placement) {
     const std::string file = path.string();
     std::error_code ec;
     if (!fs::exists(path, ec)) throw Error(file + ": file not found");
-    // Our strict pass first (obj_syntax.h): tinyobjloader turns what it cannot parse into 0.
+    // Regular files only, read here: a FIFO or /dev/stdin named as the OBJ or its mtllib would block forever.
+    if (!fs::is_regular_file(path, ec)) throw Error(file + ": not a regular file");
     const auto read_text = [](const fs::path& p) {
         std::ifstream f(p, std::ios::binary);
         if (!f) throw Error(p.string() + ": cannot open");
@@ -86,19 +87,27 @@ void load_obj(const fs::path& path, Scene& scene, const Mat4& placement) {
         ss << f.rdbuf();
         return ss.str();
     };
-    for (const std::string& lib : check_obj_text(read_text(path), file)) {
+    // Our strict pass first (obj_syntax.h): tinyobjloader turns what it cannot parse into 0. Then tinyobjloader
+    // parses the texts we read (the MTL files concatenated), never opening a file itself.
+    const std::string obj_text = read_text(path);
+    std::string mtl_text;
+    for (const std::string& lib : check_obj_text(obj_text, file)) {
         const fs::path mtl = path.parent_path() / lib;
-        if (fs::is_regular_file(mtl, ec)) {
-            check_mtl_text(read_text(mtl), mtl.string());
-            scene.files.push_back(mtl);
+        if (!fs::is_regular_file(mtl, ec)) {
+            spdlog::warn("{}: material file '{}' not found (or not a regular file); its materials get the default",
+                         file, mtl.string());
+            continue;
         }
+        const std::string text = read_text(mtl);
+        check_mtl_text(text, mtl.string());
+        scene.files.push_back(mtl);
+        mtl_text += text + "\n";
     }
     tinyobj::ObjReaderConfig config;
     config.triangulate = true;
     config.vertex_color = false;
-    config.mtl_search_path = path.parent_path().string();
     tinyobj::ObjReader reader;
-    if (!reader.ParseFromFile(file, config))
+    if (!reader.ParseFromString(obj_text, mtl_text, config))
         throw Error(file + ": " + (reader.Error().empty() ? "cannot parse OBJ" : one_line(reader.Error())));
     if (!reader.Warning().empty()) spdlog::warn("{}: {}", file, one_line(reader.Warning()));
 

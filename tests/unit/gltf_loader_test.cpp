@@ -2,6 +2,7 @@
 // must fail with one clear npt::Error naming the file and the field (never crash, hang or allocate absurd
 // amounts).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <stb_image_write.h>
 
 #include <cmath>
@@ -653,6 +654,18 @@ TEST(GltfLoaderBadInput, DeeplyNestedExtrasAreRefusedNotACrash) {
     const fs::path path = test::temp_dir() / "deep.gltf";
     test::write_file(path, text);
     expect_error(path, {"deep.gltf", "nested deeper than 256 levels"});
+}
+
+// A buffer URI naming a FIFO (or /dev/stdin) would block tinygltf's reader forever: regular files only.
+TEST(GltfLoaderBadInput, FifoBufferIsRefusedNotWaitedFor) {
+    Builder b;
+    b.node({{"mesh", b.triangle()}});
+    json d = b.j;
+    d["buffers"] = {{{"byteLength", b.bin.size()}, {"uri", "pipe.bin"}}};
+    const fs::path path = test::temp_dir() / "scene.gltf";
+    ASSERT_EQ(::mkfifo((path.parent_path() / "pipe.bin").c_str(), 0600), 0);
+    test::write_file(path, d.dump());
+    expect_error(path, {"scene.gltf", "pipe.bin"});
 }
 
 }  // namespace

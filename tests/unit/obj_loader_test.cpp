@@ -1,6 +1,7 @@
 // OBJ + MTL loader: geometry, grouping by material, the documented MTL mapping, uv flip, volume placeholders,
 // and bad input (missing file, missing MTL -> default material with a warning, NaN, bad indices).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 
@@ -170,6 +171,20 @@ TEST(ObjLoaderBadInput, NonFiniteNumbersAndBadIndices) {
                      "f -3/1/1 -2/1/1 -1/1/1\n");
     const Scene s = load_scene(dir / "ok.obj");
     EXPECT_EQ(s.triangle_count(), 1u);
+}
+
+// A FIFO (or /dev/stdin) named as an MTL file or a texture would block the loader forever: regular files only.
+TEST(ObjLoaderBadInput, FifosAreRefusedNotWaitedFor) {
+    const fs::path dir = test::temp_dir();
+    ASSERT_EQ(::mkfifo((dir / "pipe.mtl").c_str(), 0600), 0);
+    ASSERT_EQ(::mkfifo((dir / "pipe.png").c_str(), 0600), 0);
+    test::write_file(dir / "a.obj", "mtllib pipe.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl x\nf 1 2 3\n");
+    EXPECT_EQ(load_scene(dir / "a.obj").triangle_count(), 1u);  // a warning, the default material
+    test::write_file(dir / "t.mtl", "newmtl t\nmap_Kd pipe.png\n");
+    test::write_file(dir / "b.obj", "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl t\nf 1 2 3\n");
+    expect_error(dir / "b.obj", {"b.obj", "map_Kd", "pipe.png", "not a regular file"});
+    ASSERT_EQ(::mkfifo((dir / "c.obj").c_str(), 0600), 0);
+    expect_error(dir / "c.obj", {"c.obj", "not a regular file"});
 }
 
 }  // namespace
