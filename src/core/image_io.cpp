@@ -191,6 +191,9 @@ Image decode_image(const unsigned char* data, size_t size, const std::string& na
 Image read_image(const fs::path& path, bool srgb) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw Error(path.string() + ": file not found");
+    if (fs::is_directory(path, ec)) throw Error(path.string() + ": is a folder, not an image");
+    // A FIFO or a device (a texture named /dev/stdin) would block or never end.
+    if (!fs::is_regular_file(path, ec)) throw Error(path.string() + ": not a regular file");
     std::ifstream f(path, std::ios::binary);
     unsigned char magic[4] = {0, 0, 0, 0};
     f.read(reinterpret_cast<char*>(magic), 4);

@@ -67,7 +67,13 @@ std::string json_text(const fs::path& path, bool binary) {
 }
 
 // Buffers and images a glTF names by URI are read only from regular files: a URI naming /dev/stdin or a FIFO
-// would block forever, /dev/zero never ends.
+// would block forever (tinygltf's own FileExists already opens it), /dev/zero never ends. To tinygltf anything
+// else does not exist.
+bool regular_file_exists(const std::string& path, void*) {
+    std::error_code ec;
+    return fs::is_regular_file(path, ec);
+}
+
 bool read_regular_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) {
@@ -84,7 +90,7 @@ tinygltf::Model parse(const fs::path& path) {
     if (fs::file_size(path, ec) == 0) throw Error(file + ": file is empty");
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&keep_encoded_image, nullptr);
-    loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_regular_file,
+    loader.SetFsCallbacks({&regular_file_exists, &tinygltf::ExpandFilePath, &read_regular_file,
                            &tinygltf::WriteWholeFile, nullptr});
     loader.SetStoreOriginalJSONForExtrasAndExtensions(true);
     tinygltf::Model model;
