@@ -23,6 +23,7 @@ cmake --build "$build" -j "${NERFPT_JOBS:-$(nproc)}" --target fuzzers nerfpt_uni
 
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=1}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/cmake/lsan_suppressions.txt}
 
 # Seeds: what the loader tests write (valid files and the bad ones they check), harvested by extension.
 tmp_root="$build/test_tmp"

@@ -23,6 +23,7 @@ if [[ "${1:-}" == "--sanitize" ]]; then
     # Leaks are reported too; a UB report stops the test that made it (-fno-sanitize-recover).
     export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
     export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+    export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/cmake/lsan_suppressions.txt}
     if [[ $quick -eq 1 ]]; then
         cmake --build build-san -j "$jobs" --target nerfpt_unit_tests fuzzers
         slow='NerfTraining\.|BakeRoundTrip\.|TrainResume\.|EvalViewCli\.|FitTimeMapping'

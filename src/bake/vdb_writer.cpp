@@ -1,6 +1,7 @@
 // OpenVDB and NanoVDB writers (grid_writers.h): both build the same two OpenVDB grids; NanoVDB converts them.
-#include <nanovdb/util/IO.h>
-#include <nanovdb/util/OpenToNanoVDB.h>
+// clang-format off
+#include "media/nanovdb_headers.h"  // first: NanoVDB with its own asserts off
+// clang-format on
 #include <openvdb/openvdb.h>
 
 #include <exception>

@@ -1,12 +1,8 @@
 #include "media/nanovdb_reader.h"
 
 // clang-format off
-#include <iostream>  // first: Debian's nanovdb/util/GridValidator.h uses std::cerr without including it
+#include "media/nanovdb_headers.h"  // first: NanoVDB with its own asserts off
 // clang-format on
-#include <nanovdb/NanoVDB.h>
-#include <nanovdb/util/GridValidator.h>
-#include <nanovdb/util/IO.h>
-#include <nanovdb/util/SampleFromVoxels.h>
 #include <spdlog/spdlog.h>
 
 #include <array>
