@@ -58,7 +58,7 @@ TEST(JsonFile, MessagePackDepthIsBounded) {
                                {"deep.msgpack", "nested deeper than 256 levels"});
     const auto ok = nested_msgpack(k_max_json_depth, 0x91);
     EXPECT_NO_THROW(check_msgpack_depth(ok.data(), ok.size(), "ok.msgpack"));
-    EXPECT_NO_THROW((void)nlohmann::json::from_msgpack(ok));
+    EXPECT_NO_THROW(EXPECT_TRUE(nlohmann::json::from_msgpack(ok).is_array()));  // GCC ignores (void) here
     // Maps: key then value; the key is a fixstr, the value the next level.
     std::vector<uint8_t> maps;
     for (int i = 0; i < 1000; ++i) maps.insert(maps.end(), {0x81, 0xa1, 'k'});
