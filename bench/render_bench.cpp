@@ -1,6 +1,12 @@
-// Renders the shared reference scenes at their reference resolution and prints time, samples/s and the error
-// against the Cycles reference as a table (results go to docs/benchmarks.md).
-//   render_bench [--spp N] [--threads N] [--scene NAME]...   (default: cornell, 64 spp, all threads)
+// Renders scenes and prints time, samples/s and the error against a reference as a table (results go to
+// docs/benchmarks.md).
+//   render_bench [--backend cpu|optix] [--spp N] [--res WxH] [--threads N] [--repeats N] [--frames N]
+//                [--scene NAME]... [--scene-file PATH]...
+//   --scene NAME: a shared reference scene (../shared/data/scenes/NAME, compared with its reference.exr);
+//   --scene-file PATH: any scene (no reference). Default: the CPU, cornell at its reference resolution, 64 spp.
+// Columns: setup (scene on the device, acceleration structure, pipeline; per render on the CPU backend) is
+// timed apart from the render; with --frames N, N more renders of the prepared scene (seeds 1..N) give the
+// frame rate an interactive viewer would see.
 #include <tbb/task_arena.h>
 
 #include <chrono>
@@ -12,14 +18,31 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/image_stats.h"
+#include "render/backend/render_backend.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
 
 using namespace npt;
 
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+struct Job {
+    std::string name;
+    std::filesystem::path scene, reference;  // reference: empty when there is none
+};
+
+}  // namespace
+
 int main(int argc, char** argv) {
-    int spp = 64, threads = 0, repeats = 3;
-    std::vector<std::string> scenes;
+    int spp = 64, threads = 0, repeats = 3, frames = 0, width = 0, height = 0;
+    std::string backend = "cpu";
+    std::vector<Job> jobs;
+    const char* data = std::getenv("NERFPT_SHARED_DATA");
+    const std::filesystem::path root = data ? data : NERFPT_SHARED_DATA;
     for (int i = 1; i < argc; ++i) {
         std::string a = argv[i];
         auto next = [&]() -> std::string {
@@ -35,50 +58,82 @@ int main(int argc, char** argv) {
             threads = std::atoi(next().c_str());
         else if (a == "--repeats")
             repeats = std::atoi(next().c_str());
-        else if (a == "--scene")
-            scenes.push_back(next());
-        else {
+        else if (a == "--frames")
+            frames = std::atoi(next().c_str());
+        else if (a == "--scene") {
+            const std::string name = next();
+            jobs.push_back({name, root / "scenes" / name / "scene.gltf", root / "scenes" / name / "reference.exr"});
+        } else if (a == "--scene-file") {
+            const std::filesystem::path p = next();
+            jobs.push_back({p.filename().string(), p, {}});
+        } else if (a == "--backend")
+            backend = next();
+        else if (a == "--res") {
+            const std::string r = next();
+            if (std::sscanf(r.c_str(), "%dx%d", &width, &height) != 2) {
+                std::fprintf(stderr, "render_bench: --res WxH\n");
+                return 2;
+            }
+        } else {
             std::fprintf(stderr,
-                         "usage: render_bench [--spp N] [--threads N] [--repeats N] [--scene NAME]...\n");
+                         "usage: render_bench [--backend cpu|optix] [--spp N] [--res WxH] [--threads N] [--repeats N] "
+                         "[--frames N] [--scene NAME]... [--scene-file PATH]...\n");
             return 2;
         }
     }
-    if (scenes.empty()) scenes = {"cornell"};
-    const char* data = std::getenv("NERFPT_SHARED_DATA");
-    std::filesystem::path root = data ? data : NERFPT_SHARED_DATA;
+    if (spp < 1 || repeats < 1 || frames < 0) {
+        std::fprintf(stderr, "render_bench: --spp and --repeats must be >= 1, --frames >= 0\n");
+        return 2;
+    }
+    if (jobs.empty()) jobs.push_back({"cornell", root / "scenes/cornell/scene.gltf", root / "scenes/cornell/reference.exr"});
 
-    std::printf(
-        "| scene | res | spp | threads | load+build s | render s (best of %d) | Msamples/s | relMSE vs ref "
-        "|\n",
-        repeats);
-    std::printf("|---|---|---|---|---|---|---|---|\n");
+    std::printf("| scene | backend | res | spp | threads | load s | setup s | render s (best of %d) | Msamples/s | "
+                "relMSE vs ref | frames/s (%d frames) |\n",
+                repeats, frames);
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
     try {
-        for (const auto& name : scenes) {
-            auto folder = root / "scenes" / name;
+        for (const Job& job : jobs) {
             auto t0 = std::chrono::steady_clock::now();
-            scene::Scene scene = scene::load_scene(folder / "scene.gltf");
-            Image ref = read_image(folder / "reference.exr");
-            auto t1 = std::chrono::steady_clock::now();
+            scene::Scene scene = scene::load_scene(job.scene);
+            Image ref;
+            if (!job.reference.empty()) ref = read_image(job.reference);
+            const double load = seconds_since(t0);
             render::RenderOptions o;
-            o.width = ref.width;
-            o.height = ref.height;
+            o.width = width;
+            o.height = height;
+            if (width <= 0 && ref.width > 0) o.width = ref.width, o.height = ref.height;
             o.spp = spp;
             o.threads = threads;
+            o.backend = render::choose_render_backend(backend, nullptr);
             o = render::resolve_options(scene, o);
+            t0 = std::chrono::steady_clock::now();
+            const auto renderer = render::prepare_renderer(scene, o);
+            const double setup = seconds_since(t0);
             double best = 1e30;
             Image img;
             for (int r = 0; r < repeats; ++r) {
-                auto s = std::chrono::steady_clock::now();
-                img = render::render(scene, o);
-                best = std::min(best,
-                                std::chrono::duration<double>(std::chrono::steady_clock::now() - s).count());
+                t0 = std::chrono::steady_clock::now();
+                img = renderer->render(o);
+                best = std::min(best, seconds_since(t0));
             }
-            ImageComparison c = compare_images(img, ref);
-            double samples = double(o.width) * o.height * o.spp;
-            std::printf("| %s | %dx%d | %d | %d | %.3f | %.3f | %.3f | %.3g |\n", name.c_str(), o.width,
-                        o.height, o.spp, threads > 0 ? threads : tbb::this_task_arena::max_concurrency(),
-                        std::chrono::duration<double>(t1 - t0).count(), best, samples / best * 1e-6,
-                        c.rel_mse);
+            double fps = 0.0;
+            if (frames > 0) {
+                t0 = std::chrono::steady_clock::now();
+                for (int f = 1; f <= frames; ++f) {
+                    o.seed = uint64_t(f);
+                    renderer->render(o);
+                }
+                fps = frames / seconds_since(t0);
+            }
+            // The error against the reference only at its own resolution.
+            const double rel_mse =
+                img.width == ref.width && img.height == ref.height ? compare_images(img, ref).rel_mse : -1.0;
+            const double samples = double(o.width) * o.height * o.spp;
+            std::printf("| %s | %s | %dx%d | %d | %d | %.3f | %.3f | %.4f | %.3f | %.3g | %.1f |\n", job.name.c_str(),
+                        o.backend.c_str(), o.width, o.height, o.spp,
+                        threads > 0 ? threads : tbb::this_task_arena::max_concurrency(), load, setup, best,
+                        samples / best * 1e-6, rel_mse, fps);
+            std::fflush(stdout);
         }
     } catch (const Error& e) {
         std::fprintf(stderr, "render_bench: %s\n", e.what());

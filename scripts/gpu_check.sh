@@ -1,35 +1,89 @@
 #!/usr/bin/env bash
-# GPU test cycle for the lent GPU machine (no Debian libraries there, no package registry):
-#   scripts/gpu_check.sh pack   here: build the GPU test binaries for sm_90 and copy them with the non-system
-#                               shared libraries they need into the ignored folder .gpu/
-#   scripts/gpu_check.sh run    there (carry .gpu): run every GPU-labelled test binary and print a summary
+# GPU cycle for the lent GPU machine (no Debian libraries there, no package registry, 64 MiB may travel):
+#   scripts/gpu_check.sh pack       here: build the GPU binaries for sm_90 (the nerfpt CLI, the GPU tests and
+#                                   the benchmarks; the OptiX backend when .optix/ holds the SDK headers) and
+#                                   pack them with the non-system shared libraries they need into
+#                                   .gpu/bundle.tar.xz, plus the lego views the benchmarks use (100 training
+#                                   views, every 4th test view), the Cornell reference scenes and the NeRF
+#                                   demo scenes into .gpu/
+#   scripts/gpu_check.sh run        there (carry .gpu): unpack and run every GPU-labelled test
+#   scripts/gpu_check.sh bench ...  there, after run: bench/train_bench with the given arguments
+# The unpacked binaries are in /tmp/nerfpt-gpu/bin; NERFPT_CLI points the tests at the CLI there.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-}
+unpacked=/tmp/nerfpt-gpu
+
+unpack() {
+    if [[ ! -x $unpacked/bin/nerfpt_gpu_tests ]]; then
+        mkdir -p $unpacked
+        tar -xJf .gpu/bundle.tar.xz -C $unpacked
+    fi
+    export LD_LIBRARY_PATH="$unpacked/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+    export NERFPT_CLI=$unpacked/bin/nerfpt
+    export NERFPT_SHARED_DATA="$PWD/.gpu"  # the benchmarks find nerf_synthetic/lego there
+}
+
 case "$mode" in
 pack)
     build=${BUILD_DIR:-build}
     cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DNERFPT_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 \
         ${CUDACXX:+-DCMAKE_CUDA_COMPILER=$CUDACXX} >/dev/null
-    cmake --build "$build" --target nerfpt_gpu_tests
-    rm -rf .gpu && mkdir -p .gpu/lib
-    cp "$build/tests/nerfpt_gpu_tests" .gpu/
+    cmake --build "$build" --target nerfpt_gpu_tests nerfpt_cli train_bench view_bench render_bench
+    rm -rf .gpu/stage && mkdir -p .gpu/stage/bin .gpu/stage/lib
+    cp "$build/tests/nerfpt_gpu_tests" "$build/nerfpt" "$build/bench/train_bench" "$build/bench/view_bench" \
+        "$build/bench/render_bench" .gpu/stage/bin/
     # Everything ldd resolves outside the C runtime travels along (the GPU machine runs another distribution).
-    ldd .gpu/nerfpt_gpu_tests | awk '/=> \// {print $3}' |
-        grep -v -E '/(libc|libm|libdl|libpthread|librt|libgcc_s|libstdc\+\+|ld-linux[^/]*)\.so' |
-        xargs -r -I{} cp -L {} .gpu/lib/
+    for b in .gpu/stage/bin/*; do ldd "$b"; done | awk '/=> \// {print $3}' | sort -u |
+        grep -v -E '/(libc|libm|libdl|libpthread|librt|libgcc_s|libstdc\+\+|ld-linux[^/]*|libcuda)\.so' |
+        xargs -r -I{} cp -L {} .gpu/stage/lib/
+    tar -cJf .gpu/bundle.tar.xz -C .gpu/stage bin lib
+    rm -rf .gpu/stage
+    # The lego views the benchmarks read: the training set and test views 0, 4, 8, ... (train_bench
+    # --test-every 4 on the full set scores the same 50 views as --test-every 1 on this one).
+    # The reference scenes the OptiX parity tests and render_bench use (a few MB).
+    scenes=${NERFPT_SHARED_DATA:-../shared/data}/scenes
+    if [[ -d $scenes ]]; then
+        rm -rf .gpu/scenes && mkdir -p .gpu/scenes
+        cp -r "$scenes/cornell" "$scenes/cornell_volume" .gpu/scenes/
+    fi
+    # The model-in-scene demo (the NeRF queried directly, and its 256^3 bake), for the OptiX parity test and
+    # render_bench; the GPU run trains the lego.npt these name.
+    rm -rf .gpu/nerf_demo && mkdir -p .gpu/nerf_demo
+    python3 scripts/make_nerf_demo_scene.py .gpu/nerf_demo/scene.gltf >/dev/null
+    python3 scripts/make_nerf_demo_scene.py .gpu/nerf_demo/scene_baked.gltf lego_256.vdb >/dev/null
+    src=${NERFPT_SHARED_DATA:-../shared/data}/nerf_synthetic/lego
+    if [[ -d $src ]]; then
+        dst=.gpu/nerf_synthetic/lego
+        rm -rf "$dst" && mkdir -p "$dst/test"
+        cp -r "$src/train" "$src/transforms_train.json" "$dst/"
+        python3 - "$src" "$dst" <<'EOF'
+import json, shutil, sys
+src, dst = sys.argv[1], sys.argv[2]
+t = json.load(open(f"{src}/transforms_test.json"))
+t["frames"] = t["frames"][::4]
+for f in t["frames"]:
+    shutil.copy(f"{src}/{f['file_path']}.png", f"{dst}/{f['file_path']}.png")
+json.dump(t, open(f"{dst}/transforms_test.json", "w"), indent=1)
+EOF
+    fi
     du -sh .gpu
     ;;
 run)
-    export LD_LIBRARY_PATH="$PWD/.gpu/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+    unpack
     nvidia-smi -L
+    nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem,memory.total --format=csv
     status=0
-    .gpu/nerfpt_gpu_tests --gtest_brief=1 || status=$?
+    $unpacked/bin/nerfpt_gpu_tests --gtest_brief=1 "${@:2}" || status=$?
     echo "gpu_check: nerfpt_gpu_tests exit code $status"
     exit $status
     ;;
+bench)
+    unpack
+    $unpacked/bin/train_bench "${@:2}"
+    ;;
 *)
-    echo "usage: scripts/gpu_check.sh pack|run" >&2
+    echo "usage: scripts/gpu_check.sh pack|run [gtest options]|bench [train_bench options]" >&2
     exit 2
     ;;
 esac

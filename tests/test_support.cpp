@@ -33,7 +33,11 @@ void write_file(const std::filesystem::path& path, const std::string& content) {
     f << content;
 }
 
-std::filesystem::path cli_binary() { return std::filesystem::path(NERFPT_BINARY_DIR) / "nerfpt"; }
+std::filesystem::path cli_binary() {
+    // The GPU machine runs binaries copied out of the build tree (scripts/gpu_check.sh sets this).
+    if (const char* env = std::getenv("NERFPT_CLI"); env && *env) return env;
+    return std::filesystem::path(NERFPT_BINARY_DIR) / "nerfpt";
+}
 
 std::string read_text(const std::filesystem::path& path) {
     std::ifstream f(path);

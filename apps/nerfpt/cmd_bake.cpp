@@ -1,5 +1,7 @@
 #include "cmd_bake.h"
 
+#include "backend_option.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
@@ -83,12 +85,14 @@ CLI::App* add_bake_command(CLI::App& app, BakeArgs& args) {
                     "Drop voxels with sigma below this (per model unit); default: occupancy.threshold / "
                     "(8 * min_step), 0.74 with the default config")
         ->check(CLI::NonNegativeNumber);
+    add_backend_option(cmd, args.backend);
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads (default: 0)")
         ->check(CLI::Range(0, 4096));
     return cmd;
 }
 
 int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    check_requested_backend(args.backend);
     // Everything that can be checked without the model first, so a typo fails at once.
     require_file(args.model, "MODEL");
     fs::path out = args.output;
@@ -129,8 +133,10 @@ int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard&
     ps.style = progress_style(stream_is_tty(stderr), global.quiet);
     Progress progress(ps, std::cerr);
     const auto t0 = std::chrono::steady_clock::now();
+    // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
+    const std::unique_ptr<bake::BakeField> field = nerf::make_bake_field(resolve_backend(args.backend), model);
     const bake::BakedGrid grid = bake::bake_model(
-        model, settings, [&](uint64_t done, uint64_t total) { progress.update(done, total); });
+        model, settings, [&](uint64_t done, uint64_t total) { progress.update(done, total); }, field.get());
     progress.finish();
     const double bake_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (grid.density_voxels == 0)

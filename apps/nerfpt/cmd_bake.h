@@ -19,6 +19,7 @@ struct BakeArgs {
     std::string direction = "avg";
     float threshold = -1.0f;  // < 0: the default
     int threads = 0;
+    std::string backend;  // "", cpu or cuda (backend_option.h)
 };
 
 CLI::App* add_bake_command(CLI::App& app, BakeArgs& args);

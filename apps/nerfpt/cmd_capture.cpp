@@ -1,5 +1,7 @@
 #include "cmd_capture.h"
 
+#include "backend_option.h"
+
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -153,6 +155,7 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         ->capture_default_str();
     cmd->add_option("--turntable-res", args.turntable_res,
                     "WIDTHxHEIGHT of the turntable (default: the training size)");
+    add_backend_option(cmd, args.backend);
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads")
         ->check(CLI::Range(0, 4096));
     cmd->add_flag("--force", args.force,
@@ -161,10 +164,18 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
 }
 
 int run_capture(const CaptureArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    check_requested_backend(args.backend);
     require_file(args.video, "VIDEO");
     require_tools();
     if (args.holdout_every == 1) throw Error("--holdout-every 1 would hold out every frame: use 0 or >= 2");
     if (!args.config.empty()) require_file(args.config, "--config");
+    // Resolved once, when the first stage that uses it starts (--backend cuda without a GPU fails there, and
+    // the CPU fallback's note is shown once).
+    std::string resolved_backend;
+    auto backend = [&] {
+        if (resolved_backend.empty()) resolved_backend = nerf::backend_name(resolve_backend(args.backend));
+        return resolved_backend;
+    };
     // A file ffmpeg cannot read fails here, before the work folder is made.
     const capture::VideoInfo info = capture::probe_video(args.video);
     spdlog::debug("{}: {}x{}, {} frames at {:.2f} fps", args.video, info.width, info.height, info.frame_count,
@@ -282,6 +293,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         t.seconds = target_seconds;
         t.downscale = downscale;
         t.threads = args.threads;
+        t.backend = backend();
         t.config = resume ? std::string() : args.config;
         t.resume = resume;
         t.resume_hint = continue_hint;
@@ -312,6 +324,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         e.output = (work / "eval").string();
         e.downscale = downscale;
         e.threads = args.threads;
+        e.backend = backend();
         const Clock clock;
         const int rc = run_eval(e, global, interrupts);
         if (rc != 0) return rc;
@@ -344,6 +357,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         v.elevation = float(std::clamp(rig.median_elevation_deg, -80.0, 80.0));
         v.distance = float(rig.median_distance);
         v.threads = args.threads;
+        v.backend = backend();
         const Clock clock;
         const int rc = run_view(v, global, interrupts);
         if (rc != 0) return rc;

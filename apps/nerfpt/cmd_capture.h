@@ -33,6 +33,7 @@ struct CaptureArgs {
     int turntable_frames = 60;  // 0: none (2 s at 30 fps: CPU rendering of a capture is slow)
     std::string turntable_res;  // empty: the training image size
     int threads = 0;
+    std::string backend;  // train/eval/turntable: "", cpu or cuda (backend_option.h)
     bool force = false;
 };
 

@@ -24,6 +24,7 @@
 #include "nerf/dataset.h"
 #include "nerf/eval_images.h"
 #include "nerf/model_file.h"
+#include "backend_option.h"
 #include "nerf/render_view.h"
 
 namespace npt::cli {
@@ -60,6 +61,7 @@ CLI::App* add_eval_command(CLI::App& app, EvalArgs& args) {
         ->check(CLI::Range(1, 64));
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads (default: 0)")
         ->check(CLI::Range(0, 4096));
+    add_backend_option(cmd, args.backend);
     return cmd;
 }
 
@@ -87,6 +89,7 @@ std::vector<std::string> output_names(const nerf::Dataset& data, const std::vect
 }  // namespace
 
 int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    check_requested_backend(args.backend);
     // Every path first: a typo must not cost the time of loading a model and a data set.
     require_file(args.model, "MODEL");
     require_path(args.data, "DATA");
@@ -110,8 +113,10 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
             for (const char* suffix : {".png", "_compare.png"})
                 refuse_overwriting_inputs(out_dir / (name + suffix), "--output", inputs);
     }
-    spdlog::info("evaluating {} of {} views at {}x{}", views.size(), data.cameras.size(), data.width,
-                 data.height);
+    // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
+    const auto renderer = nerf::make_view_renderer(resolve_backend(args.backend), model);
+    spdlog::info("evaluating {} of {} views at {}x{} on {}", views.size(), data.cameras.size(), data.width,
+                 data.height, renderer->device());
 
     nerf::ViewOptions view_options;  // white background, as the ground truth below
     const Rgb white(1.0f, 1.0f, 1.0f);
@@ -128,7 +133,7 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
         const uint64_t rows_before = uint64_t(k) * uint64_t(data.height);
         const auto t0 = std::chrono::steady_clock::now();
         const Image render =
-            nerf::render_view(model, data.cameras[i], view_options, [&](size_t done, size_t) {
+            renderer->render(data.cameras[i], view_options, [&](size_t done, size_t) {
                 progress.update(rows_before + done, total_rows);
                 return true;
             });

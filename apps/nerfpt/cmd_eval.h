@@ -18,6 +18,7 @@ struct EvalArgs {
     int every = 1;
     int downscale = 1;
     int threads = 0;
+    std::string backend;  // "", cpu or cuda (backend_option.h)
 };
 
 CLI::App* add_eval_command(CLI::App& app, EvalArgs& args);

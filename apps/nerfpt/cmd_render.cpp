@@ -16,6 +16,7 @@
 #include "input_checks.h"
 #include "interrupt.h"
 #include "media/volume_set.h"
+#include "render/backend/render_backend.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
 
@@ -83,13 +84,14 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads (default: 0)")
         ->check(CLI::Range(0, 4096));
     cmd->add_option("--backend", args.backend,
-                    "Renderer: cpu (Embree + TBB); gpu is not built yet (default: cpu)")
+                    "Renderer: cpu (Embree + TBB) or optix (the same integrator on a GPU; built when the OptiX SDK "
+                    "headers were found) (default: optix where built and a GPU is usable, else cpu)")
         ->check(CLI::Validator(
             [](std::string& name) {
-                if (name == "cpu" || name == "gpu") return std::string();
-                return "unknown backend '" + name + "' (available: cpu)";
+                if (name == "cpu" || name == "optix" || name == "auto") return std::string();
+                return "unknown backend '" + name + "' (available: cpu, optix)";
             },
-            "cpu|gpu"));
+            "cpu|optix"));
     cmd->add_option("--camera", args.camera,
                     "Camera to render from, by glTF node or camera name (default: the scene's first camera)");
     cmd->add_option(
@@ -97,6 +99,9 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
            "PNG only: multiply by 2^STOPS before the sRGB curve and clamp, -20..20 (default: 0); the "
            "EXR is always unscaled")
         ->check(CLI::Range(-20.0f, 20.0f));
+    cmd->add_flag("--denoise", args.denoise,
+                  "OptiX backend: run OptiX's AI denoiser (albedo and normal guides); OUT.exr and OUT.png are the "
+                  "denoised image, OUT.noisy.exr the render as it came out");
     return cmd;
 }
 
@@ -140,10 +145,14 @@ std::vector<InputFile> scene_inputs(const scene::Scene& scene) {
 }  // namespace
 
 int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
-    if (args.backend == "gpu") throw Error("--backend gpu: the GPU backend is not built in this version");
+    if (args.backend == "optix") render::choose_render_backend(args.backend, nullptr);  // fails before loading
+    if (args.denoise && args.backend != "optix")
+        throw Error("--denoise: the denoiser is OptiX's; add --backend optix");
     const fs::path out_exr = args.output;
     fs::path out_png = out_exr;
     out_png.replace_extension(".png");
+    fs::path out_noisy = out_exr;  // --denoise: the render as it came out
+    out_noisy.replace_extension(".noisy.exr");
     check_output(out_exr);
 
     render::RenderOptions options;
@@ -151,15 +160,18 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     options.spp = args.spp;
     options.max_depth = args.max_depth;
     options.threads = args.threads;
-    options.backend = args.backend;
 
     const auto t_load = std::chrono::steady_clock::now();
     scene::LoadOptions load;
     load.camera_name = args.camera;
     const scene::Scene scene = scene::load_scene(args.scene, load);
-    for (const fs::path& out : {out_exr, out_png})
-        refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
+    for (const fs::path& out : {out_exr, out_png, out_noisy})
+        if (out != out_noisy || args.denoise) refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
     options.seed = args.seed_given ? args.seed : scene.settings.seed;
+    // Chosen once the input is known to be good: the CPU fallback's note never precedes an input error.
+    std::string note;
+    options.backend = render::choose_render_backend(args.backend, &note);
+    if (!note.empty()) spdlog::info("{}", note);
     const render::RenderOptions resolved = render::resolve_options(scene, options);
     spdlog::debug("loaded {} in {:.2f} s: {} meshes, {} triangles", args.scene,
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count(),
@@ -171,17 +183,26 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     ps.style = progress_style(stream_is_tty(stderr), global.quiet);
     Progress progress(ps, std::cerr);
     const auto t0 = std::chrono::steady_clock::now();
-    const Image image = render::render(
-        scene, resolved, [&progress](uint64_t done, uint64_t total) { progress.update(done, total); });
+    Image denoised;
+    const Image image = render::render_with_backend(
+        scene, resolved, [&progress](uint64_t done, uint64_t total) { progress.update(done, total); },
+        args.denoise ? &denoised : nullptr);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     progress.finish();
 
     {
-        auto no_interrupt = interrupts.hold();  // both files complete, or an interrupt waits for them
-        write_exr(out_exr, image);
-        write_png(out_png, image, args.exposure);
+        auto no_interrupt = interrupts.hold();  // every file complete, or an interrupt waits for them
+        if (args.denoise) {
+            write_exr(out_noisy, image);
+            write_exr(out_exr, denoised);
+            write_png(out_png, denoised, args.exposure);
+        } else {
+            write_exr(out_exr, image);
+            write_png(out_png, image, args.exposure);
+        }
     }
     const double samples = double(resolved.width) * resolved.height * resolved.spp;
+    if (args.denoise) fmt::print("wrote {} (denoised) and {} (as rendered)\n", out_exr.string(), out_noisy.string());
     fmt::print("wrote {}\nwrote {}\n", out_exr.string(), out_png.string());
     fmt::print("rendered {}x{} at {} spp in {} ({} samples/s)\n", resolved.width, resolved.height,
                resolved.spp, format_seconds(seconds), format_count(seconds > 0 ? samples / seconds : 0.0));

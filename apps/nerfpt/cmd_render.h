@@ -18,9 +18,10 @@ struct RenderArgs {
     uint64_t seed = 0;
     bool seed_given = false;
     int threads = 0;
-    std::string backend = "cpu";
+    std::string backend;  // "", cpu or optix (render/backend/render_backend.h)
     std::string camera;
     float exposure = 0.0f;
+    bool denoise = false;  // OptiX's denoiser: OUT.exr denoised, OUT.noisy.exr as rendered
 };
 
 // Parses "640x480" strictly: digits only, each side in 1..render::k_max_resolution. Throws npt::Error.

@@ -19,6 +19,7 @@ struct TrainArgs {
     double seconds = 0;    // total training seconds; 0: no limit
     int downscale = 1;
     int threads = 0;
+    std::string backend;  // "", cpu or cuda (backend_option.h)
     int checkpoint_every = 0;  // 0: the config's
     bool resume = false;
     bool force = false;

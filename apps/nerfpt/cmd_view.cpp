@@ -30,6 +30,7 @@
 #include "nerf/eval_images.h"
 #include "nerf/model_file.h"
 #include "nerf/orbit_camera.h"
+#include "backend_option.h"
 #include "nerf/render_view.h"
 
 namespace npt::cli {
@@ -98,6 +99,7 @@ CLI::App* add_view_command(CLI::App& app, ViewArgs& args) {
     cmd->add_option("--fps", args.fps, "Video frame rate, 1..240 (default: 30)")
         ->check(CLI::Range(1.0f, 240.0f))
         ->excludes(camera);
+    add_backend_option(cmd, args.backend);
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads (default: 0)")
         ->check(CLI::Range(0, 4096));
     return cmd;
@@ -193,6 +195,7 @@ nerf::Camera data_camera(const ViewArgs& args, const std::string& data_path, siz
 }  // namespace
 
 int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    check_requested_backend(args.backend);
     // Every check that needs no loading first: a typo must fail at once.
     require_file(args.model, "MODEL");
     const fs::path out = args.output;
@@ -263,13 +266,16 @@ int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard&
     uint64_t total_rows = 0;
     for (const nerf::Camera& c : cameras) total_rows += uint64_t(c.height);
     // Cooperative: an interrupt stops the render at the next rows, so the temporary folder is cleaned up.
+    // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
+    const auto renderer = nerf::make_view_renderer(resolve_backend(args.backend), model);
+    spdlog::info("rendering on {}", renderer->device());
     interrupts.set_cooperative(true);
     const auto t0 = std::chrono::steady_clock::now();
     try {
         uint64_t rows_before = 0;
         for (size_t k = 0; k < cameras.size(); ++k) {
             const Image img =
-                nerf::render_view(model, cameras[k], nerf::ViewOptions{}, [&](size_t done, size_t) {
+                renderer->render(cameras[k], nerf::ViewOptions{}, [&](size_t done, size_t) {
                     progress.update(rows_before + done, total_rows);
                     return !interrupts.stop_requested();
                 });

@@ -21,6 +21,7 @@ struct ViewArgs {
     float distance = 0;  // world units; 0: from the model's scale
     float fps = 30.0f;
     int threads = 0;
+    std::string backend;  // "", cpu or cuda (backend_option.h)
 };
 
 CLI::App* add_view_command(CLI::App& app, ViewArgs& args);

@@ -42,11 +42,10 @@ struct SlabVoxels {
     std::vector<uint8_t> has_density;
 };
 
-// Pass 1: σ at the centres of the slab's voxels that lie in occupied cells; keeps those >= threshold.
-void slab_density(const NerfModel& model, const BakeLayout& L, int k, float threshold, nerf::FieldBatch& b,
-                  std::vector<Vec3>& pos, std::vector<uint32_t>& cand, SlabDensity& out) {
+// The centres of slab k's voxels that lie in occupied cells, and their index j * nx + i (increasing).
+void slab_candidates(const NerfModel& model, const BakeLayout& L, int k, std::vector<Vec3>& pos,
+                     std::vector<uint32_t>& cand) {
     const nerf::OccupancyGridView occ = model.occupancy.view();
-    const nerf::NerfLayout nl = model.layout();
     const int nx = L.dims[0], ny = L.dims[1];
     pos.clear();
     cand.clear();
@@ -57,23 +56,38 @@ void slab_density(const NerfModel& model, const BakeLayout& L, int k, float thre
             pos.push_back(p);
             cand.push_back(uint32_t(j) * uint32_t(nx) + uint32_t(i));
         }
+}
+
+// Keeps the candidates whose σ passes the threshold.
+void keep_dense(const std::vector<uint32_t>& cand, const float* sigma, float threshold, SlabDensity& out) {
+    for (size_t t = 0; t < cand.size(); ++t)
+        if (sigma[t] >= threshold && std::isfinite(sigma[t])) {
+            out.ij.push_back(cand[t]);
+            out.sigma.push_back(sigma[t]);
+        }
+}
+
+// Pass 1 on the CPU: σ at the centres of the slab's voxels that lie in occupied cells; keeps those >= threshold.
+void slab_density(const NerfModel& model, const BakeLayout& L, int k, float threshold, nerf::FieldBatch& b,
+                  std::vector<Vec3>& pos, std::vector<uint32_t>& cand, SlabDensity& out) {
+    const nerf::NerfLayout nl = model.layout();
+    slab_candidates(model, L, k, pos, cand);
+    std::vector<float> sigma(pos.size());
     for (size_t off = 0; off < pos.size(); off += k_chunk) {
         const size_t m = std::min(k_chunk, pos.size() - off);
         nerf::field_forward(nl, model.params.data(), pos.data() + off, nullptr, m, false, b);
-        for (size_t t = 0; t < m; ++t)
-            if (b.sigma[t] >= threshold && std::isfinite(b.sigma[t])) {
-                out.ij.push_back(cand[off + t]);
-                out.sigma.push_back(b.sigma[t]);
-            }
+        std::copy_n(b.sigma.begin(), m, sigma.begin() + off);
     }
+    keep_dense(cand, sigma.data(), threshold, out);
 }
 
-// Pass 2: the slab's density voxels and their 3x3x3 neighbours, with colour.
-void slab_color(const NerfModel& model, const BakeLayout& L, int k, const std::vector<SlabDensity>& dens,
-                const std::vector<float>& sh, size_t n_dirs, nerf::FieldBatch& b, SlabVoxels& out) {
-    const nerf::NerfLayout nl = model.layout();
+// Pass 2, which voxels: the slab's density voxels and their 3x3x3 neighbours, without colour yet; pos gets
+// their centres.
+void slab_color_voxels(const BakeLayout& L, int k, const std::vector<SlabDensity>& dens, SlabVoxels& out,
+                       std::vector<Vec3>& pos) {
     const int nx = L.dims[0], ny = L.dims[1], nz = L.dims[2];
     const size_t plane = size_t(nx) * size_t(ny);
+    pos.clear();
     // Union of the density voxels of slabs k-1..k+1, then dilated by one voxel along i and j.
     std::vector<uint8_t> mask(plane, 0), tmp(plane, 0);
     bool any = false;
@@ -98,7 +112,6 @@ void slab_color(const NerfModel& model, const BakeLayout& L, int k, const std::v
     // Merge with this slab's density voxels (both in increasing ij).
     const SlabDensity& own = dens[size_t(k)];
     size_t next = 0;
-    std::vector<Vec3> pos;
     for (uint32_t ij = 0; ij < plane; ++ij) {
         if (!mask[ij]) continue;
         const bool has = next < own.ij.size() && own.ij[next] == ij;
@@ -108,8 +121,15 @@ void slab_color(const NerfModel& model, const BakeLayout& L, int k, const std::v
         if (has) ++next;
         pos.push_back(L.model_center(int(ij % uint32_t(nx)), int(ij / uint32_t(nx)), k));
     }
+}
 
-    // Colour: the density MLP's outputs once per voxel, then the colour MLP once per direction.
+// Pass 2 on the CPU: the slab's voxels with their colour, averaged over the directions (the density MLP's
+// outputs once per voxel, then the colour MLP once per direction).
+void slab_color(const NerfModel& model, const BakeLayout& L, int k, const std::vector<SlabDensity>& dens,
+                const std::vector<float>& sh, size_t n_dirs, nerf::FieldBatch& b, SlabVoxels& out) {
+    const nerf::NerfLayout nl = model.layout();
+    std::vector<Vec3> pos;
+    slab_color_voxels(L, k, dens, out, pos);
     const int dens_out = nl.density.outputs, col_in = nl.color.inputs, co = nl.color.outputs;
     std::vector<float> in, y;
     out.color.resize(pos.size());
@@ -135,6 +155,66 @@ void slab_color(const NerfModel& model, const BakeLayout& L, int k, const std::v
             out.color[off + t] = sum / float(n_dirs);
         }
     }
+}
+
+// The two passes with another evaluator (a GPU): slabs in order, their points gathered into large batches.
+constexpr size_t k_field_batch = size_t(1) << 20;
+
+void density_with(BakeField& field, const NerfModel& model, const BakeLayout& L, float threshold,
+                  std::vector<SlabDensity>& dens, const std::function<void()>& slab_done) {
+    const int nz = L.dims[2];
+    std::vector<Vec3> pos, batch;
+    std::vector<uint32_t> cand;
+    std::vector<std::vector<uint32_t>> pending_cand;
+    std::vector<int> pending_k;
+    std::vector<float> sigma;
+    auto flush = [&] {
+        field.density(batch, sigma);
+        size_t off = 0;
+        for (size_t q = 0; q < pending_k.size(); ++q) {
+            keep_dense(pending_cand[q], sigma.data() + off, threshold, dens[size_t(pending_k[q])]);
+            off += pending_cand[q].size();
+            slab_done();
+        }
+        batch.clear();
+        pending_cand.clear();
+        pending_k.clear();
+    };
+    for (int k = 0; k < nz; ++k) {
+        slab_candidates(model, L, k, pos, cand);
+        batch.insert(batch.end(), pos.begin(), pos.end());
+        pending_cand.push_back(cand);
+        pending_k.push_back(k);
+        if (batch.size() >= k_field_batch) flush();
+    }
+    flush();
+}
+
+void color_with(BakeField& field, const BakeLayout& L, const std::vector<SlabDensity>& dens,
+                const std::vector<Vec3>& dirs, std::vector<SlabVoxels>& slabs, const std::function<void()>& slab_done) {
+    const int nz = L.dims[2];
+    std::vector<Vec3> pos, batch;
+    std::vector<int> pending;
+    std::vector<Rgb> color;
+    auto flush = [&] {
+        field.mean_color(batch, dirs, color);
+        size_t off = 0;
+        for (int k : pending) {
+            SlabVoxels& s = slabs[size_t(k)];
+            s.color.assign(color.begin() + off, color.begin() + off + s.ij.size());
+            off += s.ij.size();
+            slab_done();
+        }
+        batch.clear();
+        pending.clear();
+    };
+    for (int k = 0; k < nz; ++k) {
+        slab_color_voxels(L, k, dens, slabs[size_t(k)], pos);
+        batch.insert(batch.end(), pos.begin(), pos.end());
+        pending.push_back(k);
+        if (batch.size() * dirs.size() >= k_field_batch) flush();
+    }
+    flush();
 }
 
 }  // namespace
@@ -218,7 +298,8 @@ std::vector<Vec3> average_directions() {
     return dirs;
 }
 
-BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const BakeProgress& progress) {
+BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const BakeProgress& progress,
+                     BakeField* field) {
     BakedGrid g;
     g.layout = make_bake_layout(model, settings);
     const BakeLayout& L = g.layout;
@@ -249,9 +330,14 @@ BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const
         if (progress) progress(now, total);
     };
 
+    std::vector<SlabDensity> dens(static_cast<size_t>(nz));
+    std::vector<SlabVoxels> slabs(static_cast<size_t>(nz));
+    if (field) {
+        density_with(*field, model, L, g.threshold, dens, report);
+        color_with(*field, L, dens, dirs, slabs, report);
+    } else {
     // Slabs are independent and each writes only its own output, so the result is the same for any thread
     // count and scheduling.
-    std::vector<SlabDensity> dens(static_cast<size_t>(nz));
     tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& r) {
         nerf::FieldBatch b;
         std::vector<Vec3> pos;
@@ -261,7 +347,6 @@ BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const
             report();
         }
     });
-    std::vector<SlabVoxels> slabs(static_cast<size_t>(nz));
     tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& r) {
         nerf::FieldBatch b;
         for (int k = r.begin(); k != r.end(); ++k) {
@@ -269,6 +354,7 @@ BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const
             report();
         }
     });
+    }
 
     size_t n = 0;
     for (const auto& s : slabs) n += s.ij.size();

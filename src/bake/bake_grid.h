@@ -76,8 +76,20 @@ struct BakedGrid {
 
 using BakeProgress = std::function<void(uint64_t done, uint64_t total)>;
 
-// Bakes the model. Parallel over z-slabs (TBB); the result does not depend on the thread count.
-BakedGrid bake_model(const nerf::NerfModel& model, const BakeSettings& settings,
-                     const BakeProgress& progress = {});
+// Where a bake evaluates the field when not on the CPU (the GPU backend implements it, nerf/backend).
+class BakeField {
+  public:
+    virtual ~BakeField() = default;
+    // σ (per model unit) at the points.
+    virtual void density(const std::vector<Vec3>& positions, std::vector<float>& sigma) = 0;
+    // The colour (sigmoid outputs) at each point, averaged over `dirs` (unit, model axes) in their order.
+    virtual void mean_color(const std::vector<Vec3>& positions, const std::vector<Vec3>& dirs,
+                            std::vector<Rgb>& color) = 0;
+};
+
+// Bakes the model: on the CPU (field == nullptr) in parallel over z-slabs (TBB), or with `field` over batches
+// of slabs; the result does not depend on the thread count.
+BakedGrid bake_model(const nerf::NerfModel& model, const BakeSettings& settings, const BakeProgress& progress = {},
+                     BakeField* field = nullptr);
 
 }  // namespace npt::bake

@@ -21,7 +21,7 @@ NPT_HD NPT_INLINE uint64_t mix64(uint64_t k) {
 
 class Pcg32 {
   public:
-    NPT_HD Pcg32() = default;
+    Pcg32() = default;  // implicitly __host__ __device__ under nvcc
     NPT_HD Pcg32(uint64_t seed, uint64_t stream) { set_sequence(seed, stream); }
 
     // One stream per pixel and sample index; `seed` is the user's --seed.

@@ -148,7 +148,14 @@ const char* const k_groups[] = {"encoding", "density_mlp", "color_mlp", "occupan
 
 }  // namespace
 
-NerfConfig config_from_json(const json& j, const std::string& source) {
+NerfConfig cuda_default_config() {
+    NerfConfig c;
+    c.encoding.grid.levels = 8;
+    c.encoding.grid.features_per_level = 4;
+    return c;
+}
+
+NerfConfig config_from_json(const json& j, const std::string& source, const NerfConfig& base) {
     if (!j.is_object())
         throw Error(source + ": expected a JSON object at the top level, got " + j.type_name());
     for (auto it = j.begin(); it != j.end(); ++it) {
@@ -156,7 +163,7 @@ NerfConfig config_from_json(const json& j, const std::string& source) {
         for (const char* g : k_groups) known = known || it.key() == g;
         if (!known) throw Error(source + ": unknown field '" + it.key() + "'");
     }
-    NerfConfig c;
+    NerfConfig c = base;
     {
         GroupReader r(j, "encoding", source);
         HashGridConfig& g = c.encoding.grid;
@@ -238,6 +245,7 @@ NerfConfig config_from_json(const json& j, const std::string& source) {
         TrainingConfig& t = c.training;
         r.read_int("batch_samples", t.batch_samples, 256, 1 << 24);
         r.read_int("max_rays_per_batch", t.max_rays_per_batch, 1, 1 << 24);
+        r.read_int("cuda_batch_samples", t.cuda_batch_samples, 1 << 12, 1 << 24);
         r.read_u64("seed", t.seed);
         r.read_int("checkpoint_interval", t.checkpoint_interval, 1, k_int_max);
         r.read_bool("random_background", t.random_background);
@@ -285,16 +293,17 @@ json config_to_json(const NerfConfig& c) {
     const TrainingConfig& t = c.training;
     j["training"] = {{"batch_samples", t.batch_samples},
                      {"max_rays_per_batch", t.max_rays_per_batch},
+                     {"cuda_batch_samples", t.cuda_batch_samples},
                      {"seed", t.seed},
                      {"checkpoint_interval", t.checkpoint_interval},
                      {"random_background", t.random_background}};
     return j;
 }
 
-NerfConfig load_config(const std::string& path) {
+NerfConfig load_config(const std::string& path, const NerfConfig& base) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": file not found");
-    return config_from_json(read_json_file(path), path);
+    return config_from_json(read_json_file(path), path, base);
 }
 
 }  // namespace npt::nerf

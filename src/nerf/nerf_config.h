@@ -69,6 +69,9 @@ struct TrainingConfig {
     // GPU; 2^16 keeps a CPU step under a second so progress and checkpoints stay responsive.
     int batch_samples = 1 << 16;
     int max_rays_per_batch = 1 << 14;
+    // The CUDA trainer's batch: samples per step that contribute to the loss (after each ray's early stop:
+    // instant-ngp's compacted batch). Rays per step adapt to reach it, up to cuda_batch_samples rays.
+    int cuda_batch_samples = 1 << 18;
     uint64_t seed = 1337;
     int checkpoint_interval = 500;  // steps between checkpoints (also on Ctrl-C and at the end)
     bool random_background = true;  // train against a random colour per ray, so alpha is learned
@@ -88,8 +91,15 @@ struct NerfConfig {
 // JSON with the same field names as the structs, grouped as {"encoding": {"levels": ...}, ...} (see
 // docs/formats.md). Missing fields keep their defaults; unknown fields, wrong types and out-of-range values
 // throw npt::Error naming `source` (a file name, for messages) and the field.
-NerfConfig config_from_json(const nlohmann::json& j, const std::string& source);
+// Missing fields keep their values in `base`.
+NerfConfig config_from_json(const nlohmann::json& j, const std::string& source, const NerfConfig& base = {});
 nlohmann::json config_to_json(const NerfConfig& c);
-NerfConfig load_config(const std::string& path);  // reads the file, then config_from_json
+NerfConfig load_config(const std::string& path, const NerfConfig& base = {});  // the file, then config_from_json
+
+// The defaults of a model trained on a GPU: instant-ngp's current hash grid of 8 levels x 4 features (half the
+// lookups of 16 x 2; on lego the same PSNR at equal training time on an H200, and more steps per second:
+// docs/benchmarks.md), everything else as NerfConfig{}. A model keeps its config, so it trains and renders
+// the same on either backend.
+NerfConfig cuda_default_config();
 
 }  // namespace npt::nerf

@@ -74,19 +74,27 @@ NPT_HD NPT_INLINE int march_cascade(const OccupancyGridView& grid, Vec3 p, float
     return from_dt > from_pos ? from_dt : from_pos;
 }
 
-// Distance along the ray from p to the exit of p's cell in cascade c (instant-ngp's distance_to_next_voxel).
-// Axes the ray is parallel to never exit; a point exactly on a boundary that the ray leaves through gives 0.
-NPT_HD NPT_INLINE float march_distance_to_cell_exit(const OccupancyGridView& grid, Vec3 p, Vec3 d, int c) {
-    const float cell = grid.cascade_size(c) / float(grid.resolution);
+// Distance along the ray from p to the exit of p's cell on a lattice of cells of side `cell` (a power of two
+// times 1/resolution) aligned at 0.5 (instant-ngp's distance_to_next_voxel). inv_d holds 1/d per axis; axes
+// the ray is parallel to (d == 0) never exit; a point exactly on a boundary that the ray leaves through gives 0.
+NPT_HD NPT_INLINE float march_distance_to_cell_exit(Vec3 p, Vec3 d, Vec3 inv_d, float cell) {
+    const float inv_cell = 1.0f / cell;  // exact for power-of-two resolutions (the default 128)
     float t = INFINITY;
     for (int a = 0; a < 3; ++a) {
         if (d[a] == 0.0f) continue;
-        // Cell boundaries are the integers of u: the cascade is centred at 0.5 and R is even.
-        const float u = (p[a] - 0.5f) / cell;
+        // Cell boundaries are the integers of u: the cascade is centred at 0.5 and its cell count is even.
+        const float u = (p[a] - 0.5f) * inv_cell;
         const float boundary = d[a] > 0.0f ? floorf(u) + 1.0f : floorf(u);
-        t = fminf(t, (boundary - u) * cell / d[a]);
+        t = fminf(t, (boundary - u) * cell * inv_d[a]);
     }
     return fmaxf(t, 0.0f);
+}
+
+// The same for p's cell in cascade c.
+NPT_HD NPT_INLINE float march_distance_to_cell_exit(const OccupancyGridView& grid, Vec3 p, Vec3 d, int c) {
+    const Vec3 inv_d(d.x != 0.0f ? 1.0f / d.x : 0.0f, d.y != 0.0f ? 1.0f / d.y : 0.0f,
+                     d.z != 0.0f ? 1.0f / d.z : 0.0f);
+    return march_distance_to_cell_exit(p, d, inv_d, grid.cascade_size(c) / float(grid.resolution));
 }
 
 // The first point of the step lattice (t, t + dt(t), ...) at or past t_target, at least one step on so that a
@@ -104,52 +112,152 @@ NPT_HD NPT_INLINE float march_advance(const MarchParams& mp, float t, float t_ta
     return fmaxf(t, t_target);
 }
 
-// Calls visit(MarchSample) for each sample of `ray` (unit direction, model space) in order, at most
-// mp.max_samples of them, until visit returns false; returns how many were visited. jitter in [0,1) offsets the
-// first sample by jitter * step so that training sees every depth. Samples lie in occupied cells only; their dt
-// is the step taken at them. A view with no occupancy array (occupied == nullptr) counts every cell as
-// occupied. Non-finite input, non-positive steps or a ray that misses give 0.
-template <typename Visit>
-NPT_HD inline int march_ray_visit(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
-                                  float jitter, Visit&& visit) {
-    if (mp.max_samples <= 0 || !isfinite(jitter) || !isfinite(mp.cone_angle)) return 0;
+// Where a march stands: a ray can be marched in pieces (the GPU renderer takes a few samples per ray per round)
+// and gives the same samples as marching it in one go.
+struct MarchCursor {
+    float t = 0, t_far = 0;
+    // With cone_angle 0 the steps are all equal and t is the lattice point t0 + k dt, computed directly rather
+    // than by repeated addition, so that any thread can compute any lattice point exactly (the GPU trainer
+    // splits a ray's lattice over several threads).
+    float t0 = 0;
+    uint32_t k = 0;
+    int count = 0;      // samples emitted so far
+    int skips = 0;      // empty cells skipped so far
+    int max_skips = 0;  // see march_start
+    bool stopped = false;
+    NPT_HD NPT_INLINE bool done(const MarchParams& mp) const {
+        return stopped || !(t < t_far) || count >= mp.max_samples;
+    }
+};
+
+// Sets up the march of `ray` (unit direction, model space); false when there is nothing to march: non-finite
+// input, non-positive steps, or a ray that misses. jitter in [0,1) offsets the first sample by jitter * step
+// so that training sees every depth.
+NPT_HD inline bool march_start(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray, float jitter,
+                               MarchCursor* c) {
+    if (mp.max_samples <= 0 || !isfinite(jitter) || !isfinite(mp.cone_angle)) return false;
     if (!(mp.min_step > 0.0f) || !(mp.max_step > 0.0f) || !isfinite(mp.min_step) || !isfinite(mp.max_step))
-        return 0;
-    if (grid.cascades < 1 || grid.resolution < 1) return 0;
+        return false;
+    if (grid.cascades < 1 || grid.resolution < 1) return false;
     float t_near = 0.0f;
     float t_far = 0.0f;
-    if (!march_bounds(mp, ray, &t_near, &t_far)) return 0;
-    t_far = fminf(t_far, mp.t_max);
-
+    if (!march_bounds(mp, ray, &t_near, &t_far)) return false;
+    c->t_far = fminf(t_far, mp.t_max);
     // Every pass either emits a sample or leaves a cell; a straight line leaves at most 3 (R + 1) cells of
     // each cascade, so this bound is never reached in exact arithmetic: it stops a ray whose t is so large
     // that steps no longer change it.
-    const int max_skips = 3 * (grid.resolution + 2) * grid.cascades + 64;
-    int skips = 0;
-    int count = 0;
-    float t = t_near + jitter * march_step(mp, t_near);
-    while (t < t_far && count < mp.max_samples) {
-        const Vec3 p = ray.at(t);
-        const float dt = march_step(mp, t);
-        const int c = march_cascade(grid, p, dt);
-        if (grid.occupied == nullptr || grid.is_occupied(p, c)) {
-            ++count;
-            if (!visit(MarchSample{p, t, dt})) break;
-            const float next = t + dt;
-            if (!(next > t)) break;
-            t = next;
-        } else {
-            if (++skips > max_skips) break;
-            // The epsilon (a millionth of a cell, or of t where t is larger) moves the target off the
-            // boundary itself, so that rounding of o + t d cannot leave the next position in this cell.
-            const float cell = grid.cascade_size(c) / float(grid.resolution);
-            const float eps = fmaxf(1e-6f * cell, 1e-6f * t);
-            const float next = march_advance(mp, t, t + march_distance_to_cell_exit(grid, p, ray.d, c) + eps);
-            if (!(next > t)) break;
-            t = next;
+    c->max_skips = 3 * (grid.resolution + 2) * grid.cascades + 64;
+    c->skips = 0;
+    c->count = 0;
+    c->stopped = false;
+    c->t = t_near + jitter * march_step(mp, t_near);
+    c->t0 = c->t;
+    c->k = 0;
+    return true;
+}
+
+// The lattice index of the first lattice point (t0 + k dt) at or past `target`, at least k + 1.
+NPT_HD NPT_INLINE float march_lattice_next(float t0, float inv_dt, uint32_t k, float target) {
+    const float kn = ceilf((target - t0) * inv_dt);
+    return kn > float(k) + 1.0f ? kn : float(k) + 1.0f;
+}
+
+// Moves a uniform-step march (cone_angle 0) to the first lattice point inside [box_min, box_max] and ends it
+// where the ray leaves the box. With the box around every occupied cell the samples do not change (no
+// occupied cell lies outside it), only the empty space before and after is no longer walked. Returns false
+// when the ray misses the box (nothing to march). Marches with a cone angle are left as they are.
+NPT_HD inline bool march_clip(const MarchParams& mp, const Ray& ray, Vec3 box_min, Vec3 box_max, MarchCursor* c) {
+    if (mp.cone_angle != 0.0f) return true;
+    MarchParams box = mp;
+    box.aabb_min = box_min;
+    box.aabb_max = box_max;
+    float t_in = 0.0f, t_out = 0.0f;
+    if (!march_bounds(box, ray, &t_in, &t_out)) return false;
+    const float dt = march_step(mp, c->t0);
+    if (t_in > c->t) {
+        // One lattice point early: a point a rounding before t_in may still lie in the box's first cell.
+        const float kn = ceilf((t_in - c->t0) / dt) - 1.0f;
+        if (!(kn < 4.0e9f)) return false;
+        if (kn > float(c->k)) {
+            c->k = uint32_t(kn);
+            c->t = c->t0 + float(c->k) * dt;
         }
     }
-    return count;
+    // One step of slack: a lattice point a rounding past t_out may still lie in the box's last cell.
+    c->t_far = fminf(c->t_far, t_out + dt);
+    return c->t < c->t_far;
+}
+
+// Continues the march: calls visit(MarchSample) for each sample in order until visit returns false (the
+// cursor then stands after that sample) or the march is done. Samples lie in occupied cells only; their dt is
+// the step taken at them. A view without occupancy (has_occupancy() false) counts every cell as occupied.
+template <typename Visit>
+NPT_HD inline void march_continue(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
+                                  MarchCursor& c, Visit&& visit) {
+    const Vec3 inv_d(ray.d.x != 0.0f ? 1.0f / ray.d.x : 0.0f, ray.d.y != 0.0f ? 1.0f / ray.d.y : 0.0f,
+                     ray.d.z != 0.0f ? 1.0f / ray.d.z : 0.0f);
+    const bool lattice = mp.cone_angle == 0.0f;
+    const float inv_dt = lattice ? 1.0f / march_step(mp, c.t0) : 0.0f;
+    while (!c.stopped && c.t < c.t_far && c.count < mp.max_samples) {
+        const float t = c.t;
+        const Vec3 p = ray.at(t);
+        const float dt = march_step(mp, t);
+        const int cas = march_cascade(grid, p, dt);
+        if (!grid.has_occupancy() || grid.is_occupied(p, cas)) {
+            ++c.count;
+            const bool more = visit(MarchSample{p, t, dt});
+            float next = t + dt;
+            if (lattice) next = c.t0 + float(++c.k) * dt;
+            if (!(next > t)) {
+                c.stopped = true;
+                return;
+            }
+            c.t = next;
+            if (!more) return;
+        } else {
+            if (++c.skips > c.max_skips) {
+                c.stopped = true;
+                return;
+            }
+            // The epsilon (a millionth of a cell, or of t where t is larger) moves the target off the
+            // boundary itself, so that rounding of o + t d cannot leave the next position in this cell.
+            const float cell = grid.cascade_size(cas) / float(grid.resolution);
+            const float eps = fmaxf(1e-6f * cell, 1e-6f * t);
+            // Inside an empty coarse cell the whole coarse cell is crossed at once: no sample can lie in it.
+            const float skip_cell =
+                grid.coarse_occupied(p, cas) ? cell : cell * float(OccupancyGridView::k_coarse);
+            const float target = t + march_distance_to_cell_exit(p, ray.d, inv_d, skip_cell) + eps;
+            float next;
+            if (lattice) {
+                const float kn = march_lattice_next(c.t0, inv_dt, c.k, target);
+                if (!(kn < 4.0e9f)) {  // beyond any lattice a ray can have
+                    c.stopped = true;
+                    return;
+                }
+                c.k = uint32_t(kn);
+                next = c.t0 + float(c.k) * dt;
+            } else {
+                next = march_advance(mp, t, target);
+            }
+            if (!(next > t)) {
+                c.stopped = true;
+                return;
+            }
+            c.t = next;
+        }
+    }
+}
+
+// Calls visit(MarchSample) for each sample of `ray` (unit direction, model space) in order, at most
+// mp.max_samples of them, until visit returns false; returns how many were visited (march_start and
+// march_continue in one go). Non-finite input, non-positive steps or a ray that misses give 0.
+template <typename Visit>
+NPT_HD inline int march_ray_visit(const MarchParams& mp, const OccupancyGridView& grid, const Ray& ray,
+                                  float jitter, Visit&& visit) {
+    MarchCursor c;
+    if (!march_start(mp, grid, ray, jitter, &c)) return 0;
+    march_continue(mp, grid, ray, c, visit);
+    return c.count;
 }
 
 // Writes up to mp.max_samples samples of `ray` into out and returns how many (march_ray_visit).

@@ -13,6 +13,9 @@ namespace npt::nerf {
 
 struct ViewOptions {
     Rgb background{1.0f, 1.0f, 1.0f};  // the literature evaluates NeRF-synthetic on white
+    // The GPU renderer's samples per live ray in its first round (they double each round, up to 64); 0: its
+    // default. The image does not depend on it, only the time; the CPU ignores it.
+    int gpu_first_round = 0;
 };
 
 // Returns an RGBA image: colour composited over the background, as the training images store it (sRGB-encoded

@@ -11,6 +11,7 @@
 #include "core/rng.h"
 #include "nerf/composite.h"
 #include "nerf/field_batch.h"
+#include "nerf/loss.h"
 
 namespace npt::nerf {
 
@@ -25,17 +26,6 @@ struct TrainRay {
     uint32_t first = 0, count = 0;  // samples [first, first + count) of the batch
     Rgb target, background;
 };
-
-// Huber loss per channel (instant-ngp's, alpha = delta) and its derivative w.r.t. the prediction.
-inline float huber(float diff, float delta, float* grad) {
-    const float a = std::fabs(diff);
-    if (a < delta) {
-        *grad = diff / delta;
-        return 0.5f * diff * diff / delta;
-    }
-    *grad = diff > 0 ? 1.0f : -1.0f;
-    return a - 0.5f * delta;
-}
 
 }  // namespace
 
@@ -79,7 +69,41 @@ void Trainer::sync_model() {
     m_adam.averaged_params(st.params.data(), m_model.params.data());
 }
 
-StepStats Trainer::step() try {
+StepStats Trainer::step() {
+    const auto t0 = std::chrono::steady_clock::now();
+    StepStats stats = compute_gradient();
+    TrainingState& st = *m_model.training;
+    const uint64_t step = m_adam.state().step;
+    auto lap = [last = std::chrono::steady_clock::now()]() mutable {
+        const auto now = std::chrono::steady_clock::now();
+        const double s = std::chrono::duration<double>(now - last).count();
+        last = now;
+        return s;
+    };
+
+    // 6. Adam, then the occupancy grid with the new parameters.
+    m_adam.step(st.params.data(), m_grads.data());
+    stats.phases.adam = lap();
+    stats.step = m_adam.state().step;
+    if (step % m_occupancy_interval == 0) {
+        update_occupancy(step);
+        stats.occupancy_updated = true;
+    }
+    stats.phases.occupancy = lap();
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    st.elapsed_seconds += stats.seconds;
+    return stats;
+}
+
+StepStats Trainer::gradient(std::vector<float>& grads) {
+    const uint32_t rays = m_model.training->rays_per_step;
+    StepStats stats = compute_gradient();
+    m_model.training->rays_per_step = rays;  // nothing changes: the next step sees the same batch
+    grads = m_grads;
+    return stats;
+}
+
+StepStats Trainer::compute_gradient() try {
     const auto t0 = std::chrono::steady_clock::now();
     auto lap = [last = t0]() mutable {
         const auto now = std::chrono::steady_clock::now();
@@ -115,9 +139,14 @@ StepStats Trainer::step() try {
             const int ix = std::min(int(px), m_data.width - 1), iy = std::min(int(py), m_data.height - 1);
             const uint8_t* pix = m_data.image(img) + (size_t(iy) * m_data.width + ix) * 4;
             TrainRay& tr = rays[r];
-            tr.background = cfg.training.random_background
-                                ? Rgb(rng.next_float(), rng.next_float(), rng.next_float())
-                                : Rgb(1.0f);
+            tr.background = Rgb(1.0f);
+            if (cfg.training.random_background) {
+                // One draw per statement: the order of a constructor's arguments is unspecified in C++, and
+                // the GPU trainer must draw the same background for the same ray.
+                tr.background.x = rng.next_float();
+                tr.background.y = rng.next_float();
+                tr.background.z = rng.next_float();
+            }
             const float alpha = pix[3] / 255.0f;
             const Rgb rgb(pix[0] / 255.0f, pix[1] / 255.0f, pix[2] / 255.0f);
             tr.target = rgb * alpha + tr.background * (1.0f - alpha);
@@ -189,7 +218,7 @@ StepStats Trainer::step() try {
         double loss = 0, se = 0;
         for (int k = 0; k < 3; ++k) {
             const float diff = fwd.color[k] - tr.target[k];
-            loss += huber(diff, delta, &grad[k]);
+            loss += huber_loss(diff, delta, &grad[k]);
             se += double(diff) * diff;
         }
         ray_loss[r] = loss;
@@ -229,16 +258,6 @@ StepStats Trainer::step() try {
     accumulate_grid_gradient(m_layout, chunk_pos, chunk_ptr, grads);
     stats.phases.grid_backward = lap();
 
-    // 6. Adam, then the occupancy grid with the new parameters.
-    m_adam.step(st.params.data(), grads);
-    stats.phases.adam = lap();
-    stats.step = m_adam.state().step;
-    if (step % m_occupancy_interval == 0) {
-        update_occupancy(step);
-        stats.occupancy_updated = true;
-    }
-    stats.phases.occupancy = lap();
-
     // The next step's ray count aims at a full batch given this step's samples per ray.
     const double per_ray = n_rays > 0 ? double(total_marched) / n_rays : 1.0;
     st.rays_per_step = uint32_t(std::clamp<double>(double(budget) / std::max(per_ray, 1.0), 64.0,
@@ -253,8 +272,8 @@ StepStats Trainer::step() try {
     stats.mse = n_kept ? se / (3.0 * n_kept) : 0.0;
     stats.rays = uint32_t(n_kept);
     stats.samples = uint32_t(n_samples);
+    stats.marched = uint32_t(n_samples);
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    st.elapsed_seconds += stats.seconds;
     return stats;
 } catch (const std::bad_alloc&) {
     throw Error(

@@ -19,7 +19,8 @@ struct StepStats {
     double loss = 0;          // mean Huber loss per ray (summed over channels)
     double mse = 0;           // mean squared error per channel, for a training PSNR
     uint32_t rays = 0;        // rays in the batch
-    uint32_t samples = 0;     // samples evaluated
+    uint32_t samples = 0;     // samples trained on (the CUDA trainer: those before each ray's early stop)
+    uint32_t marched = 0;     // samples marched and evaluated (CPU: the same as samples)
     double seconds = 0;       // wall time of the step
     bool occupancy_updated = false;
     // Where the step's time went, for profiles and benchmarks.
@@ -37,11 +38,15 @@ public:
 
     StepStats step();
     uint64_t steps_done() const { return m_adam.state().step; }
+    // The gradient step() would apply next (mean loss over the batch's rays, before L2), into grads (the
+    // model's layout); the model and the optimizer do not change. For tests against the GPU trainer.
+    StepStats gradient(std::vector<float>& grads);
 
     // Copies the optimizer state and the averaged parameters into the model, ready to save.
     void sync_model();
 
 private:
+    StepStats compute_gradient();  // marching to the hash-grid backward: fills m_grads
     void update_occupancy(uint64_t step);
 
     NerfModel& m_model;

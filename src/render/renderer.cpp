@@ -31,14 +31,15 @@ RenderOptions resolve_options(const scene::Scene& scene, const RenderOptions& op
                     std::to_string(k_max_depth) + ")");
     if (r.threads < 0 || r.threads > 4096)
         throw Error("--threads: " + std::to_string(r.threads) + " is out of range");
-    if (r.backend != "cpu") {
-        if (r.backend == "gpu") throw Error("--backend gpu: the GPU backend is not built in this version");
-        throw Error("--backend: unknown backend '" + r.backend + "' (available: cpu)");
-    }
+    if (r.backend != "cpu" && r.backend != "optix")
+        throw Error("--backend: unknown backend '" + r.backend + "' (available: cpu, optix)");
     return r;
 }
 
 Image render(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress) {
+    // The OptiX backend lives in a separate library: render/backend/render_backend.h dispatches to it.
+    if (resolved.backend != "cpu")
+        throw Error("render: backend '" + resolved.backend + "' is not the CPU's (use render_with_backend)");
     return cpu::render_cpu(scene, resolved, progress);
 }
 

@@ -83,7 +83,12 @@ expect_error 2 "unknown backend 'vulkan'" render "$scene" -o "$tmp/a.exr" --back
 # Errors a user can act on: exit code 1, one line naming the thing.
 expect_error 1 "missing\.gltf" render "$tmp/missing.gltf" -o "$tmp/a.exr"
 expect_error 1 "missing\.gltf" info "$tmp/missing.gltf"
-expect_error 1 "GPU backend is not built" render "$scene" -o "$tmp/a.exr" --backend gpu
+expect_error 2 "unknown backend 'gpu'" render "$scene" -o "$tmp/a.exr" --backend gpu
+expect_error 1 "--denoise: the denoiser is OptiX's" render "$scene" -o "$tmp/a.exr" --denoise
+# Without a usable OptiX backend (CI: not built, or no GPU) asking for it is an error, never a silent fallback.
+if [[ -z "${NERFPT_CLI_HAS_GPU:-}" ]]; then
+    expect_error 1 "--backend optix: " render "$scene" -o "$tmp/a.exr" --backend optix
+fi
 expect_error 1 "no_such_folder.*does not exist" render "$scene" -o "$tmp/no_such_folder/a.exr"
 expect_error 1 "\.exr" render "$scene" -o "$tmp/a.png"
 expect_error 1 "camera 'nope'" info "$scene" --camera nope

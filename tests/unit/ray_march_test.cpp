@@ -143,8 +143,10 @@ TEST(RayMarch, StepWithoutConeAngleIsConstant) {
     EXPECT_FLOAT_EQ(s[0].t, 1.0f + jitter * mp.min_step);
     for (size_t i = 0; i < s.size(); ++i) {
         EXPECT_EQ(s[i].dt, mp.min_step);
+        // The lattice t0 + i dt, computed directly (no rounding accumulates along the ray).
+        EXPECT_EQ(s[i].t, s[0].t + float(i) * mp.min_step);
         if (i > 0) {
-            EXPECT_EQ(s[i].t, s[i - 1].t + s[i - 1].dt);
+            EXPECT_NEAR(s[i].t - s[i - 1].t, s[i - 1].dt, 1e-6f);
         }
     }
     // The unit length is covered: floor or ceil of 1 / dt samples, the last one within one step of the exit.

@@ -61,7 +61,7 @@ TEST(RenderOptions, RejectsZeroAbsurdAndUnknown) {
     expect_error(o, "--threads");
     o.threads = 0;
     o.backend = "gpu";
-    expect_error(o, "GPU backend is not built");
+    expect_error(o, "unknown backend 'gpu' (available: cpu, optix)");
     o.backend = "vulkan";
     expect_error(o, "unknown backend");
 }

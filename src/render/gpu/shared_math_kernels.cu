@@ -11,7 +11,8 @@
 #include "nerf/ray_march.h"
 #include "nerf/sh_encoding.h"
 #include "render/camera.h"
-#include "render/gpu/device_buffer.h"
+#include "core/cuda/device_buffer.h"
+#include "render/gpu/device_scene.h"
 #include "render/gpu/shared_math_check.h"
 
 namespace npt::gpu {
@@ -67,55 +68,6 @@ void check_launch(const char* what) {
     cuda_check(cudaGetLastError(), what);
     cuda_check(cudaDeviceSynchronize(), what);
 }
-
-template <typename T>
-Span<const T> span_of(const DeviceBuffer<T>& b) {
-    return {b.data(), b.size()};
-}
-
-// Owns device copies of every array a LightSetView points to, and the view over them.
-class DeviceLightSet {
-public:
-    explicit DeviceLightSet(const lights::LightSetView& host) : m_view(host) {
-        m_lights.upload(host.lights.data, host.lights.size);
-        m_bins.upload(host.selector.bins.data, host.selector.bins.size);
-        m_offsets.upload(host.mesh_light_offset.data, host.mesh_light_offset.size);
-        std::vector<TextureView> textures;
-        for (size_t t = 0; t < host.textures.size; ++t) textures.push_back(upload_texture(host.textures[t]));
-        m_textures.upload(textures.data(), textures.size());
-        m_view.lights = span_of(m_lights);
-        m_view.selector.bins = span_of(m_bins);
-        m_view.mesh_light_offset = span_of(m_offsets);
-        m_view.textures = span_of(m_textures);
-
-        const Distribution2DView& d = host.environment.distribution;
-        m_env_texture_view = upload_texture(host.environment.texture);
-        m_view.environment.texture = m_env_texture_view;
-        m_func.upload(d.func.data, d.func.size);
-        m_conditional.upload(d.conditional.data, d.conditional.size);
-        m_marginal.upload(d.marginal_cdf.data, d.marginal_cdf.size);
-        m_view.environment.distribution.func = span_of(m_func);
-        m_view.environment.distribution.conditional = span_of(m_conditional);
-        m_view.environment.distribution.marginal_cdf = span_of(m_marginal);
-    }
-    const lights::LightSetView& view() const { return m_view; }
-
-private:
-    TextureView upload_texture(const TextureView& t) {
-        if (!t.valid()) return TextureView{};
-        m_texels.emplace_back(t.rgba, size_t(t.width) * size_t(t.height) * 4);
-        return TextureView{m_texels.back().data(), t.width, t.height};
-    }
-
-    lights::LightSetView m_view;
-    DeviceBuffer<lights::Light> m_lights;
-    DeviceBuffer<AliasBin> m_bins;
-    DeviceBuffer<int32_t> m_offsets;
-    DeviceBuffer<TextureView> m_textures;
-    std::vector<DeviceBuffer<float>> m_texels;
-    TextureView m_env_texture_view;
-    DeviceBuffer<float> m_func, m_conditional, m_marginal;
-};
 
 }  // namespace
 
@@ -189,37 +141,11 @@ std::vector<Vec2> run_sampler_cases(uint64_t seed, int dimensions, const std::ve
 
 std::vector<media::VolumeResult> run_volume_cases(const std::vector<media::VolumeView>& volumes,
                                                   const std::vector<VolumeCase>& cases) {
-    std::vector<DeviceBuffer<float>> densities, majorants;
-    std::vector<DeviceBuffer<Vec3>> colors;
-    std::vector<media::VolumeView> device_views = volumes;
-    std::vector<DeviceBuffer<uint8_t>> occupancies;
-    for (media::VolumeView& v : device_views) {
-        if (v.kind == media::VolumeKind::Nerf) {
-            // The network's parameters and the occupancy bytes; everything else in the view is plain values.
-            densities.emplace_back(v.nerf.field.params, v.nerf.field.layout.total);
-            v.nerf.field.params = densities.back().data();
-            const size_t r = size_t(v.nerf.occupancy.resolution);
-            occupancies.emplace_back(v.nerf.occupancy.occupied, size_t(v.nerf.occupancy.cascades) * r * r * r);
-            v.nerf.occupancy.occupied = occupancies.back().data();
-            continue;
-        }
-        size_t n = size_t(v.grid.nx) * size_t(v.grid.ny) * size_t(v.grid.nz);
-        densities.emplace_back(v.grid.density, n);
-        colors.emplace_back(v.grid.color, n);
-        v.grid.density = densities.back().data();
-        v.grid.color = colors.back().data();
-        if (v.majorant.max_density) {
-            size_t m = size_t(v.majorant.nx) * size_t(v.majorant.ny) * size_t(v.majorant.nz);
-            majorants.emplace_back(v.majorant.max_density, m);
-            v.majorant.max_density = majorants.back().data();
-        }
-    }
-    DeviceBuffer<media::VolumeView> views(device_views);
+    const DeviceVolumes device({volumes.data(), volumes.size()});
     DeviceBuffer<VolumeCase> in(cases);
     DeviceBuffer<media::VolumeResult> out(cases.size());
     if (!cases.empty())
-        volume_kernel<<<blocks_for(cases.size()), k_block>>>({views.data(), views.size()}, in.data(), out.data(),
-                                                            cases.size());
+        volume_kernel<<<blocks_for(cases.size()), k_block>>>(device.view(), in.data(), out.data(), cases.size());
     check_launch("volume_kernel");
     return out.download();
 }

@@ -1,0 +1,92 @@
+#include "render/backend/render_backend.h"
+
+#include "core/error.h"
+
+#if NERFPT_HAVE_OPTIX
+#include "nerf/cuda/cuda_device.h"
+#include "render/gpu/optix_renderer.h"
+#endif
+
+namespace npt::render {
+
+bool optix_backend_built() {
+#if NERFPT_HAVE_OPTIX
+    return true;
+#else
+    return false;
+#endif
+}
+
+namespace {
+
+std::string optix_unavailable_reason() {
+#if NERFPT_HAVE_OPTIX
+    std::string why;
+    return nerf::cuda::cuda_device_usable(&why) ? std::string() : why;
+#else
+    return "this nerfpt was built without the OptiX backend (no OptiX SDK headers at build time)";
+#endif
+}
+}  // namespace
+
+std::string choose_render_backend(const std::string& requested, std::string* note) {
+    if (note) note->clear();
+    if (requested == "cpu") return "cpu";
+    if (requested == "optix") {
+        const std::string why = optix_unavailable_reason();
+        if (!why.empty()) throw Error("--backend optix: " + why + " (use --backend cpu)");
+        return "optix";
+    }
+    if (!requested.empty() && requested != "auto")
+        throw Error("--backend: '" + requested + "' is not a renderer (cpu, optix)");
+    const std::string why = optix_unavailable_reason();
+    if (why.empty()) return "optix";
+    // Only worth a note where the GPU renderer exists and could have been used.
+    if (note && optix_backend_built()) *note = "rendering on the CPU: " + why;
+    return "cpu";
+}
+
+namespace {
+
+class CpuSceneRenderer final : public SceneRenderer {
+  public:
+    explicit CpuSceneRenderer(const scene::Scene& scene) : m_scene(scene) {}
+    Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised) override {
+        if (denoised) throw Error("--denoise: the denoiser is OptiX's and needs --backend optix");
+        return render::render(m_scene, resolved, progress);
+    }
+
+  private:
+    const scene::Scene& m_scene;
+};
+
+#if NERFPT_HAVE_OPTIX
+class OptixSceneRenderer final : public SceneRenderer {
+  public:
+    OptixSceneRenderer(const scene::Scene& scene, const RenderOptions& resolved)
+        : m_renderer(scene, resolved.width, resolved.height) {}
+    Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised) override {
+        return m_renderer.render(resolved, progress, denoised);
+    }
+
+  private:
+    gpu::OptixRenderer m_renderer;
+};
+#endif
+
+}  // namespace
+
+std::unique_ptr<SceneRenderer> prepare_renderer(const scene::Scene& scene, const RenderOptions& resolved) {
+#if NERFPT_HAVE_OPTIX
+    if (resolved.backend == "optix") return std::make_unique<OptixSceneRenderer>(scene, resolved);
+#endif
+    if (resolved.backend == "optix") throw Error("--backend optix: " + optix_unavailable_reason());
+    return std::make_unique<CpuSceneRenderer>(scene);
+}
+
+Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress,
+                          Image* denoised) {
+    return prepare_renderer(scene, resolved)->render(resolved, progress, denoised);
+}
+
+}  // namespace npt::render

@@ -1,0 +1,36 @@
+// Which renderer `nerfpt render` uses: the CPU (Embree + TBB) or OptiX on a GPU, and the call that renders
+// with it. Front ends use this instead of render::render so that none of them needs CUDA or OptiX headers.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "render/renderer.h"
+
+namespace npt::render {
+
+// True when this binary has the OptiX backend.
+bool optix_backend_built();
+
+// requested: "" or "auto" (optix when built and a GPU is usable, else cpu with *note saying why), "cpu", or
+// "optix" (npt::Error naming the reason when it cannot be used: no silent fallback).
+std::string choose_render_backend(const std::string& requested, std::string* note);
+
+// A scene prepared for many renders at one resolution (frames of an animation or a viewer, benchmarks): on
+// OptiX the scene, acceleration structure and pipeline are built once; the CPU backend builds its Embree scene
+// per render, as render() does.
+class SceneRenderer {
+  public:
+    virtual ~SceneRenderer() = default;
+    // Renders `resolved` (its width and height must be the prepared ones); see render_with_backend.
+    virtual Image render(const RenderOptions& resolved, const ProgressFn& progress = {},
+                         Image* denoised = nullptr) = 0;
+};
+std::unique_ptr<SceneRenderer> prepare_renderer(const scene::Scene& scene, const RenderOptions& resolved);
+
+// Renders with resolved.backend ("cpu" or "optix"). With `denoised` (OptiX only: npt::Error otherwise), the
+// denoiser's image goes there and the noisy one is returned.
+Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress = {},
+                          Image* denoised = nullptr);
+
+}  // namespace npt::render

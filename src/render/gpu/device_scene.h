@@ -1,0 +1,72 @@
+// Device copies of what a SceneView points to (meshes, materials, textures, lights, volumes with their grids or
+// NeRF parameters), and the SceneView over them that device code reads: the scene the CPU renders, in GPU
+// memory. Host code only.
+#pragma once
+
+#include <vector>
+
+#include "core/cuda/device_buffer.h"
+#include "render/scene_view.h"
+
+namespace npt::gpu {
+
+template <typename T>
+Span<const T> span_of(const DeviceBuffer<T>& b) {
+    return {b.data(), b.size()};
+}
+
+// Every array a LightSetView points to, and the view over the copies.
+class DeviceLightSet {
+  public:
+    explicit DeviceLightSet(const lights::LightSetView& host);
+    const lights::LightSetView& view() const { return m_view; }
+
+  private:
+    TextureView upload_texture(const TextureView& t);
+
+    lights::LightSetView m_view;
+    DeviceBuffer<lights::Light> m_lights;
+    DeviceBuffer<AliasBin> m_bins;
+    DeviceBuffer<int32_t> m_offsets;
+    DeviceBuffer<TextureView> m_textures;
+    std::vector<DeviceBuffer<float>> m_texels;
+    DeviceBuffer<float> m_func, m_conditional, m_marginal;
+};
+
+// The volumes: grids (density, colour, majorant) or NeRF models (parameters, occupancy bytes).
+class DeviceVolumes {
+  public:
+    explicit DeviceVolumes(Span<const media::VolumeView> host);
+    Span<const media::VolumeView> view() const { return span_of(m_views); }
+
+  private:
+    std::vector<DeviceBuffer<float>> m_floats;
+    std::vector<DeviceBuffer<Vec3>> m_colors;
+    std::vector<DeviceBuffer<uint8_t>> m_bytes;
+    DeviceBuffer<media::VolumeView> m_views;
+};
+
+// The whole scene.
+class DeviceScene {
+  public:
+    explicit DeviceScene(const render::SceneView& host);
+    const render::SceneView& view() const { return m_view; }
+    // Per mesh, for building acceleration structures: device positions and indices.
+    const DeviceBuffer<Vec3>& positions(size_t mesh) const { return m_positions[mesh]; }
+    const DeviceBuffer<uint32_t>& indices(size_t mesh) const { return m_indices[mesh]; }
+    size_t mesh_count() const { return m_positions.size(); }
+
+  private:
+    std::vector<DeviceBuffer<Vec3>> m_positions, m_normals;
+    std::vector<DeviceBuffer<Vec2>> m_uvs;
+    std::vector<DeviceBuffer<uint32_t>> m_indices;
+    DeviceBuffer<render::MeshView> m_meshes;
+    DeviceBuffer<render::MaterialView> m_materials;
+    std::vector<DeviceBuffer<float>> m_texels;
+    DeviceBuffer<TextureView> m_textures;
+    DeviceLightSet m_lights;
+    DeviceVolumes m_volumes;
+    render::SceneView m_view;
+};
+
+}  // namespace npt::gpu

@@ -1,0 +1,35 @@
+// The path tracer's OptiX pipeline: the module (the embedded OptiX-IR of device/optix_programs.cu), one program
+// group per program, the linked pipeline with its stack sizes, and the shader binding table built from a small
+// table of (program group, record) pairs: a ray-generation record, a miss record per ray type, and a hit-group
+// record per (mesh build input, ray type) that carries the mesh's index (optix_launch.h, HitRecordData).
+#pragma once
+
+#include <optix_types.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "core/cuda/device_buffer.h"
+
+namespace npt::gpu {
+
+class OptixPrograms {
+  public:
+    // input_meshes: the mesh index of each build input of the acceleration structure (optix_accel.h).
+    OptixPrograms(OptixDeviceContext ctx, const std::vector<uint32_t>& input_meshes);
+    ~OptixPrograms();
+    OptixPrograms(const OptixPrograms&) = delete;
+    OptixPrograms& operator=(const OptixPrograms&) = delete;
+
+    OptixPipeline pipeline() const { return m_pipeline; }
+    const OptixShaderBindingTable& sbt() const { return m_sbt; }
+
+  private:
+    OptixModule m_module = nullptr;
+    std::vector<OptixProgramGroup> m_groups;
+    OptixPipeline m_pipeline = nullptr;
+    DeviceBuffer<unsigned char> m_records;
+    OptixShaderBindingTable m_sbt{};
+};
+
+}  // namespace npt::gpu

@@ -1,0 +1,146 @@
+#include "render/gpu/optix_renderer.h"
+
+#include <cuda_runtime.h>
+#include <optix.h>
+#include <optix_stubs.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "core/cuda/device_buffer.h"
+#include "core/error.h"
+#include "nerf/cuda/cuda_device.h"
+#include "render/gpu/device_scene.h"
+#include "render/gpu/optix_accel.h"
+#include "render/gpu/optix_context.h"
+#include "render/gpu/optix_denoiser.h"
+#include "render/gpu/optix_launch.h"
+#include "render/gpu/optix_pipeline.h"
+#include "render/scene_data.h"
+
+namespace npt::gpu {
+
+namespace {
+// A launch aims at this long, so that progress moves and Ctrl-C is answered quickly.
+constexpr double k_launch_target_seconds = 0.1;
+// Threads a launch should have to fill the GPU (132 SMs x 2048 resident threads is 270 k; more hides the tails
+// of long paths). A small image gets that many by tracing several of a pixel's samples side by side.
+constexpr size_t k_threads_per_launch = size_t(1) << 21;
+constexpr uint32_t k_max_slots = 64;
+
+struct StreamOwner {
+    cudaStream_t s = nullptr;
+    StreamOwner() { cuda_check(cudaStreamCreate(&s), "cudaStreamCreate"); }
+    ~StreamOwner() { cudaStreamDestroy(s); }
+};
+}  // namespace
+
+struct OptixRenderer::State {
+    State(const scene::Scene& scene, int w, int h)
+        : width(w), height(h), data(scene, w, h), dev(data.view()), accel(ctx.get(), dev, stream.s),
+          programs(ctx.get(), accel.input_meshes()) {}
+    int width, height;
+    render::SceneData data;
+    DeviceScene dev;
+    OptixContext ctx;
+    StreamOwner stream;
+    OptixAccel accel;
+    OptixPrograms programs;
+};
+
+OptixRenderer::OptixRenderer(const scene::Scene& scene, int width, int height) {
+    const std::string device = nerf::cuda::require_cuda_device();
+    spdlog::debug("OptiX on {}", device);
+    m = std::make_unique<State>(scene, width, height);
+}
+
+OptixRenderer::~OptixRenderer() = default;
+
+Image OptixRenderer::render(const render::RenderOptions& options, const render::ProgressFn& progress,
+                            Image* denoised) {
+    const int width = m->width, height = m->height;
+    if (options.width != width || options.height != height)
+        throw Error("OptixRenderer: built for " + std::to_string(width) + "x" + std::to_string(height) +
+                    ", asked for " + std::to_string(options.width) + "x" + std::to_string(options.height));
+    const uint32_t spp = uint32_t(options.spp);
+    cudaStream_t stream = m->stream.s;
+    std::unique_ptr<OptixDenoiserPass> denoiser;
+    if (denoised) denoiser = std::make_unique<OptixDenoiserPass>(m->ctx.get(), stream, width, height);
+
+    const size_t pixels = size_t(width) * size_t(height);
+    // Sample slots: a launch of width x height x slots threads, slot z tracing samples z, z + slots, ... of its
+    // pixel into its own plane of sums; the planes are added in a fixed order, so a seed gives one image.
+    const uint32_t slots = uint32_t(std::clamp<size_t>((k_threads_per_launch + pixels - 1) / pixels, 1,
+                                                       std::min<size_t>(k_max_slots, spp)));
+    DeviceBuffer<float4> accum(pixels * slots, "the image", "--res");
+    accum.zero_async(stream);
+    DeviceBuffer<unsigned long long> dropped(1);
+    dropped.zero_async(stream);
+    DeviceBuffer<LaunchParams> params(1);
+    DeviceBuffer<float4> albedo, normal;  // the denoiser's guides
+    if (denoised) {
+        albedo.allocate(pixels, "the denoiser's guides", "--res");
+        normal.allocate(pixels, "the denoiser's guides", "--res");
+    }
+
+    LaunchParams p;
+    p.scene = m->dev.view();
+    p.handle = m->accel.handle();
+    p.accum = accum.data();
+    p.dropped = dropped.data();
+    p.width = width;
+    p.height = height;
+    p.slots = slots;
+    p.seed = options.seed;
+    p.albedo = albedo.data();
+    p.normal = normal.data();
+    p.path.max_depth = options.max_depth;
+
+    const uint64_t total = uint64_t(pixels) * spp;
+    uint32_t done = 0, batch = slots;  // the first launch: one sample per slot
+    while (done < spp) {
+        p.sample_begin = done;
+        p.sample_count = std::min(batch, spp - done);
+        cuda_check(cudaMemcpyAsync(params.data(), &p, sizeof p, cudaMemcpyHostToDevice, stream), "cudaMemcpyAsync");
+        const auto t0 = std::chrono::steady_clock::now();
+        optix_check(optixLaunch(m->programs.pipeline(), stream, CUdeviceptr(params.data()), sizeof(LaunchParams),
+                                &m->programs.sbt(), unsigned(width), unsigned(height),
+                                std::min(slots, p.sample_count)),
+                    "optixLaunch");
+        cuda_check(cudaStreamSynchronize(stream), "rendering with OptiX");
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        done += p.sample_count;
+        if (progress) progress(uint64_t(pixels) * done, total);
+        // Size the next launch from this one: about k_launch_target_seconds each, whole rounds of slots.
+        const double per_sample = seconds / double(p.sample_count);
+        const double next = std::clamp(k_launch_target_seconds / std::max(per_sample, 1e-7), 1.0, 4096.0);
+        batch = std::max(slots, uint32_t(next) / slots * slots);
+    }
+
+    const std::vector<float4> sums = accum.download();
+    const unsigned long long bad = dropped.download()[0];
+    if (bad > 0) spdlog::warn("render: {} samples were NaN or infinite and were dropped", bad);
+    Image image(width, height, 3);
+    const float inv = 1.0f / float(spp);
+    for (size_t i = 0; i < pixels; ++i) {
+        float r = 0.0f, g = 0.0f, b = 0.0f;
+        for (uint32_t z = 0; z < slots; ++z) {
+            const float4& s = sums[z * pixels + i];
+            r += s.x, g += s.y, b += s.z;
+        }
+        image.pixels[3 * i + 0] = r * inv;
+        image.pixels[3 * i + 1] = g * inv;
+        image.pixels[3 * i + 2] = b * inv;
+    }
+    if (denoiser) *denoised = denoiser->run(image, albedo.data(), normal.data());
+    return image;
+}
+
+Image render_optix(const scene::Scene& scene, const render::RenderOptions& options,
+                   const render::ProgressFn& progress, Image* denoised) {
+    OptixRenderer renderer(scene, options.width, options.height);
+    return renderer.render(options, progress, denoised);
+}
+
+}  // namespace npt::gpu

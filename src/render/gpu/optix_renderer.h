@@ -1,0 +1,36 @@
+// The OptiX backend of `nerfpt render`: the CPU backend's image (the same integrator, samplers and scene data)
+// traced by OptiX on the GPU. Launches a few samples per pixel at a time so that progress is reported and an
+// interrupt stops the render between launches.
+#pragma once
+
+#include <memory>
+
+#include "render/renderer.h"
+
+namespace npt::gpu {
+
+// A scene on the GPU, ready for many renders (frames) at one resolution: the scene data, acceleration
+// structures and pipeline are built once, in the constructor. Throws npt::Error with a one-line reason when no
+// GPU, no driver or no OptiX runtime can be used.
+class OptixRenderer {
+  public:
+    OptixRenderer(const scene::Scene& scene, int width, int height);
+    ~OptixRenderer();
+    OptixRenderer(const OptixRenderer&) = delete;
+    OptixRenderer& operator=(const OptixRenderer&) = delete;
+
+    // options.spp samples per pixel from options.seed (width and height as constructed). With `denoised`, also
+    // runs the denoiser (albedo and normal guides) and puts its image there.
+    Image render(const render::RenderOptions& options, const render::ProgressFn& progress,
+                 Image* denoised = nullptr);
+
+  private:
+    struct State;
+    std::unique_ptr<State> m;
+};
+
+// One render: construct, render, release.
+Image render_optix(const scene::Scene& scene, const render::RenderOptions& options,
+                   const render::ProgressFn& progress, Image* denoised = nullptr);
+
+}  // namespace npt::gpu
