@@ -121,6 +121,7 @@ int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard&
         bake::check_raw_size(layout);
         out = bake::raw_output_path(out, layout);
     }
+    refuse_overwriting_inputs(out, "--output", {{"MODEL", args.model}});
     spdlog::info(
         "baking {} to {}x{}x{} voxels (local x, y, z), crop ({:g}, {:g}, {:g}) .. ({:g}, {:g}, {:g})",
         args.model, layout.dims[0], layout.dims[1], layout.dims[2], layout.crop.min.x, layout.crop.min.y,

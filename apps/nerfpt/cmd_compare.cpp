@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "core/error.h"
 #include "core/image_io.h"
 #include "core/image_stats.h"
 
@@ -20,6 +21,10 @@ CLI::App* add_compare_command(CLI::App& app, CompareArgs& args) {
 int run_compare(const CompareArgs& args, const GlobalSettings&) {
     Image image = read_image(args.image);
     Image ref = read_image(args.reference);
+    const auto size = [](const Image& i) { return std::to_string(i.width) + "x" + std::to_string(i.height); };
+    if (image.width != ref.width || image.height != ref.height)
+        throw Error("IMAGE '" + args.image + "' is " + size(image) + " but REFERENCE '" + args.reference +
+                    "' is " + size(ref) + ": compare needs images of the same size");
     ImageComparison c = compare_images(image, ref);
     fmt::print("relMSE     {:.4g}\n", c.rel_mse);
     const char* names[3] = {"R", "G", "B"};

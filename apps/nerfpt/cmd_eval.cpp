@@ -106,6 +106,13 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     std::vector<size_t> views;
     for (size_t i = 0; i < data.cameras.size(); i += size_t(args.every)) views.push_back(i);
     const std::vector<std::string> names = output_names(data, views);
+    if (!args.output.empty()) {  // -o inside the data set's folder must not replace a ground-truth image
+        const auto inputs = dataset_inputs(data, {{"MODEL", args.model}});
+        refuse_overwriting_inputs(out_dir / "metrics.json", "--output", inputs);
+        for (const std::string& name : names)
+            for (const char* suffix : {".png", "_compare.png"})
+                refuse_overwriting_inputs(out_dir / (name + suffix), "--output", inputs);
+    }
     // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
     const auto renderer = nerf::make_view_renderer(resolve_backend(args.backend), model);
     spdlog::info("evaluating {} of {} views at {}x{} on {}", views.size(), data.cameras.size(), data.width,

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include "input_checks.h"
 #include "nerf/model_file.h"
 #include "nerf/ngp_snapshot.h"
 
@@ -25,6 +26,7 @@ CLI::App* add_import_ngp_command(CLI::App& app, ImportNgpArgs& args) {
 }
 
 int run_import_ngp(const ImportNgpArgs& args, const GlobalSettings& /*global*/) {
+    refuse_overwriting_inputs(args.output, "--output", {{"SNAPSHOT", args.snapshot}});
     nerf::NgpImport imp = nerf::import_ngp_snapshot(args.snapshot);
     for (const std::string& note : imp.notes) spdlog::warn("{}", note);
     const nerf::NerfLayout layout = imp.model.layout();

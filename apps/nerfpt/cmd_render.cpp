@@ -13,7 +13,9 @@
 #include "core/error.h"
 #include "core/image_io.h"
 #include "core/progress.h"
+#include "input_checks.h"
 #include "interrupt.h"
+#include "media/volume_set.h"
 #include "render/backend/render_backend.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
@@ -123,6 +125,23 @@ void check_output(const fs::path& out) {
     if (fs::is_directory(out, ec)) throw Error("--output '" + out.string() + "': is a folder");
 }
 
+// Every file the scene was read from: the scene files, its textures and its volumes' grids or models.
+std::vector<InputFile> scene_inputs(const scene::Scene& scene) {
+    std::vector<InputFile> in;
+    for (const auto& f : scene.files) in.push_back({"scene file", f});
+    for (const auto& t : scene.textures)
+        in.push_back({"texture", t.name});  // "<embedded #i>" matches no file
+    for (const auto& v : scene.volumes) {
+        const fs::path declared = v.declared_in.empty() ? scene.source : v.declared_in;
+        try {
+            const fs::path file = media::parse_volume_desc(v.extras_json, declared.string()).file;
+            in.push_back({"volume file", file.is_relative() ? declared.parent_path() / file : file});
+        } catch (const Error&) {  // reported when the volume is loaded
+        }
+    }
+    return in;
+}
+
 }  // namespace
 
 int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
@@ -137,6 +156,8 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     const fs::path out_exr = args.output;
     fs::path out_png = out_exr;
     out_png.replace_extension(".png");
+    fs::path out_noisy = out_exr;  // --denoise: the render as it came out
+    out_noisy.replace_extension(".noisy.exr");
     check_output(out_exr);
 
     render::RenderOptions options;
@@ -149,6 +170,8 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     scene::LoadOptions load;
     load.camera_name = args.camera;
     const scene::Scene scene = scene::load_scene(args.scene, load);
+    for (const fs::path& out : {out_exr, out_png, out_noisy})
+        if (out != out_noisy || args.denoise) refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
     options.seed = args.seed_given ? args.seed : scene.settings.seed;
     // Chosen once the input is known to be good: the CPU fallback's note never precedes an input error.
     std::string note;
@@ -172,8 +195,6 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     progress.finish();
 
-    fs::path out_noisy = out_exr;
-    out_noisy.replace_extension(".noisy.exr");
     {
         auto no_interrupt = interrupts.hold();  // every file complete, or an interrupt waits for them
         if (args.denoise) {

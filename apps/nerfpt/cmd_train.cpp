@@ -121,6 +121,7 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     check_requested_backend(args.backend);
     const fs::path out = args.output;
     check_output(out, args.resume, args.force);
+    refuse_overwriting_inputs(out, "--output", {{"DATA", args.data}, {"--config", args.config}});
     std::optional<tbb::global_control> threads;
     if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
 
@@ -135,6 +136,7 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     }
     const bool tty = stream_is_tty(stderr);
     nerf::Dataset data = load_dataset_with_progress(args.data, args.split, args.downscale, global.quiet);
+    refuse_overwriting_inputs(out, "--output", dataset_inputs(data));
     // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
     const nerf::Backend backend = resolve_backend(args.backend);
     if (!args.resume) {

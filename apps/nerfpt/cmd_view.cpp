@@ -23,6 +23,7 @@
 #include "core/executable.h"
 #include "core/image_io.h"
 #include "core/progress.h"
+#include "dataset_loading.h"
 #include "input_checks.h"
 #include "interrupt.h"
 #include "nerf/dataset.h"
@@ -168,8 +169,10 @@ std::pair<std::string, size_t> parse_camera_arg(const std::string& text) {
     return {text.substr(0, colon), size_t(std::stoul(index))};
 }
 
-nerf::Camera data_camera(const ViewArgs& args, const std::string& data_path, size_t index) {
+nerf::Camera data_camera(const ViewArgs& args, const std::string& data_path, size_t index,
+                         std::vector<InputFile>* inputs) {
     const nerf::Dataset data = nerf::load_dataset(data_path, args.split);
+    *inputs = dataset_inputs(data, std::move(*inputs));
     if (index >= data.cameras.size())
         throw Error("--camera '" + args.camera + "': index " + std::to_string(index) + " is out of range (" +
                     std::to_string(data.cameras.size()) + " frames)");
@@ -224,8 +227,9 @@ int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard&
 
     const nerf::NerfModel model = nerf::load_model(args.model);
     std::vector<nerf::Camera> cameras;
+    std::vector<InputFile> inputs{{"MODEL", args.model}};
     if (!args.camera.empty()) {
-        cameras.push_back(data_camera(args, data_path, camera_index));
+        cameras.push_back(data_camera(args, data_path, camera_index, &inputs));
     } else {
         nerf::OrbitSettings orbit;
         orbit.centre = nerf::model_centre_world(model);
@@ -250,6 +254,9 @@ int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard&
         if (video) return temp->path() / fmt::format("frame_{:04}.png", k);
         return out.parent_path() / fmt::format("{}_{:04}.png", out.stem().string(), k);
     };
+    refuse_overwriting_inputs(out, "--output", inputs);  // e.g. -o r_7.png beside data set image r_7.png
+    for (size_t k = 0; !video && k < cameras.size(); ++k)
+        refuse_overwriting_inputs(frame_path(k), "--output", inputs);
 
     ProgressSettings ps;
     ps.label = "view";

@@ -20,4 +20,11 @@ nerf::Dataset load_dataset_with_progress(const std::string& data, const std::str
     return ds;
 }
 
+std::vector<InputFile> dataset_inputs(const nerf::Dataset& data, std::vector<InputFile> extra) {
+    extra.push_back({"DATA", data.source});
+    for (size_t i = 0; i < data.image_files.size(); ++i)
+        extra.push_back({"DATA's image of frame " + std::to_string(i), data.image_files[i]});
+    return extra;
+}
+
 }  // namespace npt::cli

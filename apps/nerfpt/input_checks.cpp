@@ -38,4 +38,24 @@ void require_writable_parent(const fs::path& file, const std::string& what) {
     if (fs::is_directory(file, ec)) throw Error(what + " '" + file.string() + "': is a folder");
 }
 
+bool same_file(const fs::path& a, const fs::path& b) {
+    std::error_code ec;
+    if (fs::exists(a, ec) && fs::exists(b, ec)) {
+        const bool same = fs::equivalent(a, b, ec);
+        if (!ec) return same;
+    }
+    const fs::path ca = fs::weakly_canonical(fs::absolute(a, ec), ec);
+    const fs::path cb = fs::weakly_canonical(fs::absolute(b, ec), ec);
+    return !ca.empty() && ca == cb;
+}
+
+void refuse_overwriting_inputs(const fs::path& output, const std::string& option,
+                               const std::vector<InputFile>& inputs) {
+    for (const InputFile& in : inputs)
+        if (!in.path.empty() && same_file(output, in.path))
+            throw Error(
+                option + " '" + output.string() + "': is the input " + in.what + " '" + in.path.string() +
+                "'; write the output elsewhere (no command replaces its own input, even with --force)");
+}
+
 }  // namespace npt::cli

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace npt::cli {
 
@@ -20,5 +21,20 @@ void prepare_output_folder(const std::filesystem::path& dir, const std::string& 
 // Throws npt::Error when the folder that would hold `file` does not exist or is not writable, or `file` is a
 // folder.
 void require_writable_parent(const std::filesystem::path& file, const std::string& what);
+
+// One of a command's inputs, named as the command line names it ("DATA", "MODEL", "image of frame 3").
+struct InputFile {
+    std::string what;
+    std::filesystem::path path;
+};
+
+// True when `a` and `b` name the same file: the same inode when both exist (symbolic and hard links, "./x",
+// "a/../x"), else the same normalised absolute path.
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
+
+// No command writes over one of its own inputs, --force or not: throws npt::Error "OPTION 'out': is the input
+// WHAT 'in'; write the output elsewhere" when `output` is the same file as one of `inputs`.
+void refuse_overwriting_inputs(const std::filesystem::path& output, const std::string& option,
+                               const std::vector<InputFile>& inputs);
 
 }  // namespace npt::cli

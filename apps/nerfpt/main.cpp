@@ -24,6 +24,7 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "interrupt.h"
+#include "option_checks.h"
 
 namespace {
 
@@ -71,6 +72,7 @@ int main(int argc, char** argv) {
     CLI::App* capture_cmd = add_capture_command(app, capture_args);
     PoseErrorArgs pose_error_args;
     CLI::App* pose_error_cmd = add_pose_error_command(app, pose_error_args);
+    check_numbers_strictly(app);  // NaN, "-1" for an unsigned, octal: refused for every option at once
 
     try {
         app.parse(argc, argv);
@@ -101,6 +103,12 @@ int main(int argc, char** argv) {
         if (pose_error_cmd->parsed()) return run_pose_error(pose_error_args, global);
     } catch (const npt::Error& e) {
         print_error(e.what());
+        return k_exit_error;
+    } catch (const std::bad_alloc&) {
+        // The large allocations an input or option decides name themselves (core/memory.h); this is the rest.
+        print_error(
+            "out of memory: the input or the options ask for more memory than this machine has "
+            "(lower --res, --spp, image sizes or the config's sizes)");
         return k_exit_error;
     } catch (const std::exception& e) {
         // Not one of ours (bad_alloc, a library's exception): still one line, with its type unspoken.

@@ -1,6 +1,7 @@
 // OpenVDB and NanoVDB writers (grid_writers.h): both build the same two OpenVDB grids; NanoVDB converts them.
-#include <nanovdb/util/IO.h>
-#include <nanovdb/util/OpenToNanoVDB.h>
+// clang-format off
+#include "media/nanovdb_headers.h"  // first: NanoVDB with its own asserts off
+// clang-format on
 #include <openvdb/openvdb.h>
 
 #include <exception>
@@ -82,8 +83,12 @@ void write_nvdb(const std::filesystem::path& path, const BakedGrid& grid) {
     TempFile tmp(path);
     try {
         std::vector<nanovdb::GridHandle<>> handles;
-        handles.push_back(nanovdb::openToNanoVDB(*g.density));
-        handles.push_back(nanovdb::openToNanoVDB(*g.color));
+        // A full checksum (NanoVDB's default is partial: header and upper nodes only), so that the reader
+        // detects a corrupted voxel too.
+        handles.push_back(
+            nanovdb::openToNanoVDB(*g.density, nanovdb::StatsMode::Default, nanovdb::ChecksumMode::Full));
+        handles.push_back(
+            nanovdb::openToNanoVDB(*g.color, nanovdb::StatsMode::Default, nanovdb::ChecksumMode::Full));
         std::ofstream out(tmp.path(), std::ios::binary | std::ios::trunc);
         if (!out) throw Error(path.string() + ": cannot write (cannot create a file in its folder)");
         nanovdb::io::writeGrids(out, handles);

@@ -18,6 +18,9 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string read_whole_file(const fs::path& file) {
+    std::error_code ec;
+    if (fs::exists(file, ec) && !fs::is_regular_file(file, ec))  // a FIFO would block forever
+        throw Error(file.string() + ": not a regular file");
     std::ifstream in(file, std::ios::binary);
     if (!in) throw Error(file.string() + ": cannot open (missing or unreadable)");
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

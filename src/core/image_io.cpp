@@ -18,6 +18,8 @@
 #include <system_error>
 
 #include "core/error.h"
+#include "core/memory.h"
+#include "core/temp_file.h"
 
 namespace npt {
 namespace fs = std::filesystem;
@@ -58,7 +60,21 @@ struct StbFree {
     void operator()(void* p) const { stbi_image_free(p); }
 };
 
+Image decode_stb_sized(const unsigned char* data, size_t size, const std::string& name, bool srgb);
+
+// The decoder's buffer and ours (float RGBA at most): a 32768x32768 image is allowed by its header and needs
+// 20 GiB.
 Image decode_stb(const unsigned char* data, size_t size, const std::string& name, bool srgb) {
+    int w = 0, h = 0, n = 0;
+    const bool known =
+        size > 0 && size <= size_t(INT32_MAX) && stbi_info_from_memory(data, int(size), &w, &h, &n);
+    const double bytes = known ? double(w) * double(h) * (4.0 * 4.0 + 4.0 * n) : 0.0;
+    return with_memory_context(name + ": a " + std::to_string(w) + "x" + std::to_string(h) + " image", bytes,
+                               "use a smaller image",
+                               [&] { return decode_stb_sized(data, size, name, srgb); });
+}
+
+Image decode_stb_sized(const unsigned char* data, size_t size, const std::string& name, bool srgb) {
     if (size == 0) throw Error(name + ": file is empty");
     if (size > size_t(INT32_MAX)) throw Error(name + ": file is too large to decode");
     int len = int(size);
@@ -124,6 +140,8 @@ Image read_exr(const fs::path& path) {
         return img;
     } catch (const Error&) {
         throw;
+    } catch (const std::bad_alloc&) {
+        throw Error(name + ": not enough memory to read the EXR image (use a smaller image)");
     } catch (const std::exception& e) {
         std::string what = e.what();
         std::replace(what.begin(), what.end(), '\n', ' ');
@@ -135,16 +153,15 @@ std::vector<unsigned char> read_bytes(const fs::path& path) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw Error(path.string() + ": file not found");
     if (fs::is_directory(path, ec)) throw Error(path.string() + ": is a folder, not an image");
+    // A FIFO or a device (a texture named /dev/stdin) would block or never end.
+    if (!fs::is_regular_file(path, ec)) throw Error(path.string() + ": not a regular file");
     std::ifstream f(path, std::ios::binary);
     if (!f) throw Error(path.string() + ": cannot open");
     return std::vector<unsigned char>(std::istreambuf_iterator<char>(f), {});
 }
 
 // A sibling name unlikely to collide with a concurrent writer, so rename() is atomic in one file system.
-fs::path temp_sibling(const fs::path& path) {
-    std::random_device rd;
-    return path.parent_path() / (path.filename().string() + ".tmp" + std::to_string(rd() % 1000000));
-}
+fs::path temp_sibling(const fs::path& path) { return new_temp_path(path); }
 
 void commit_temp(const fs::path& tmp, const fs::path& path) {
     std::error_code ec;
@@ -174,6 +191,9 @@ Image decode_image(const unsigned char* data, size_t size, const std::string& na
 Image read_image(const fs::path& path, bool srgb) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw Error(path.string() + ": file not found");
+    if (fs::is_directory(path, ec)) throw Error(path.string() + ": is a folder, not an image");
+    // A FIFO or a device (a texture named /dev/stdin) would block or never end.
+    if (!fs::is_regular_file(path, ec)) throw Error(path.string() + ": not a regular file");
     std::ifstream f(path, std::ios::binary);
     unsigned char magic[4] = {0, 0, 0, 0};
     f.read(reinterpret_cast<char*>(magic), 4);

@@ -1,7 +1,11 @@
 #include "core/temp_file.h"
 
+#include <signal.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <random>
 #include <string>
@@ -11,13 +15,46 @@
 
 namespace npt {
 
-// Pid and a random number: two bakes writing into one folder never share a temporary name, and the rename
-// stays within one file system, so it is atomic.
-TempFile::TempFile(std::filesystem::path target) : m_target(std::move(target)) {
-    std::random_device rd;
-    m_temp = m_target.parent_path() / (m_target.filename().string() + ".tmp-" + std::to_string(getpid()) +
-                                       "-" + std::to_string(rd() % 1000000));
+int remove_stale_temporaries(const std::filesystem::path& target) {
+    namespace fs = std::filesystem;
+    const std::string prefix = target.filename().string() + ".tmp-";
+    const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    std::error_code ec;
+    fs::directory_iterator it(dir, ec), end;
+    int removed = 0;
+    for (; !ec && it != end; it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+        // The pid: the digits after ".tmp-", up to '-' or the end.
+        size_t i = prefix.size();
+        long long pid = 0;
+        while (i < name.size() && name[i] >= '0' && name[i] <= '9' && pid < (1LL << 40))
+            pid = pid * 10 + (name[i++] - '0');
+        if (i == prefix.size() || (i < name.size() && name[i] != '-') || pid <= 0 || pid > INT32_MAX)
+            continue;
+        if (pid_t(pid) == ::getpid()) continue;
+        if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to judge (EPERM)
+        std::error_code rm;
+        if (fs::is_regular_file(it->path(), rm) && fs::remove(it->path(), rm)) {
+            ++removed;
+            spdlog::info("removed {}: a temporary file left by process {}, which no longer runs",
+                         it->path().string(), pid);
+        }
+    }
+    return removed;
 }
+
+// Pid and a random number: two writers of one folder never share a temporary name, and the rename stays
+// within one file system, so it is atomic. The pid also tells a stale temporary from a live one.
+std::filesystem::path new_temp_path(const std::filesystem::path& target) {
+    remove_stale_temporaries(target);
+    std::random_device rd;
+    return target.parent_path() / (target.filename().string() + ".tmp-" + std::to_string(getpid()) + "-" +
+                                   std::to_string(rd() % 1000000));
+}
+
+TempFile::TempFile(std::filesystem::path target)
+    : m_target(std::move(target)), m_temp(new_temp_path(m_target)) {}
 
 TempFile::~TempFile() {
     if (m_committed) return;

@@ -7,6 +7,14 @@
 
 namespace npt {
 
+// A fresh temporary name beside `target`: "<name>.tmp-<pid>-<random>" (every atomic writer uses this form).
+// First removes the temporaries of `target` that a killed process left (SIGKILL, power loss): those whose pid
+// names no running process. A temporary of a live process (another writer of the same file) is kept.
+std::filesystem::path new_temp_path(const std::filesystem::path& target);
+
+// The stale-temporary sweep alone; returns how many files it removed.
+int remove_stale_temporaries(const std::filesystem::path& target);
+
 class TempFile {
   public:
     explicit TempFile(std::filesystem::path target);

@@ -9,7 +9,7 @@ namespace npt::media {
 std::vector<float> build_majorant(const VolumeGrid& g, int* nx, int* ny, int* nz) {
     const int b = k_majorant_block;
     // Cell c covers voxels b c - 1 .. b c + b (the trilinear support of its index range).
-    auto cells = [b](int n) { return (n + 1 + b - 1) / b; };
+    auto cells = [](int n) { return (n + 1 + k_majorant_block - 1) / k_majorant_block; };
     *nx = cells(g.nx);
     *ny = cells(g.ny);
     *nz = cells(g.nz);

@@ -1,12 +1,8 @@
 #include "media/nanovdb_reader.h"
 
 // clang-format off
-#include <iostream>  // first: Debian's nanovdb/util/GridValidator.h uses std::cerr without including it
+#include "media/nanovdb_headers.h"  // first: NanoVDB with its own asserts off
 // clang-format on
-#include <nanovdb/NanoVDB.h>
-#include <nanovdb/util/GridValidator.h>
-#include <nanovdb/util/IO.h>
-#include <nanovdb/util/SampleFromVoxels.h>
 #include <spdlog/spdlog.h>
 
 #include <array>
@@ -72,7 +68,16 @@ nanovdb::GridHandle<> read_typed(const std::string& where, const nanovdb::io::Gr
                     " bytes in a file of " + std::to_string(file_size) + " bytes (corrupt file)");
     auto handle = nanovdb::io::readGrid<nanovdb::HostBuffer>(where, meta.gridName);
     const auto* g = handle.template grid<ValueT>();
-    if (!g || !nanovdb::isValid(*g, true, false)) throw Error(where + ": " + grid + " is corrupt");
+    if (!g || !nanovdb::isValid(*g, true, false))
+        throw Error(where + ": " + grid + " is corrupt (its structure or checksum does not match)");
+    // isValid checks the checksum the file carries. NanoVDB's default (partial) covers the header and upper
+    // nodes only, so a flipped voxel value goes unnoticed: say so once per grid.
+    const nanovdb::ChecksumMode mode = nanovdb::GridChecksum(g->checksum()).mode();
+    if (mode != nanovdb::ChecksumMode::Full)
+        spdlog::warn(
+            "{}: {} carries {} checksum: corrupted voxel values cannot be detected (nerfpt bake writes a "
+            "full one)",
+            where, grid, mode == nanovdb::ChecksumMode::Partial ? "only a partial" : "no");
     return handle;
 }
 

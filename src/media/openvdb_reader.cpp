@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "media/openvdb_layout.h"
 
 namespace npt::media {
 namespace {
@@ -78,6 +79,7 @@ VolumeGrid read_openvdb_grid(const std::filesystem::path& path) {
     ensure_openvdb_initialized();
     const std::string where = path.string();
     try {
+        check_openvdb_layout(where);
         openvdb::io::File file(where);
         file.open(false);  // no delayed loading: the file is read now and not kept mapped
         if (!file.hasGrid("density"))

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "media/nanovdb_reader.h"
 #include "media/openvdb_reader.h"
 #include "media/raw_grid_reader.h"
@@ -79,15 +80,22 @@ VolumeGrid load_volume_grid(const std::filesystem::path& path, const GridLoadOpt
                    [](unsigned char c) { return char(std::tolower(c)); });
 
     VolumeGrid g;
-    if (ext == ".vdb")
-        g = read_openvdb_grid(path);
-    else if (ext == ".nvdb")
-        g = read_nanovdb_grid(path);
-    else if (ext == ".bin")
-        g = read_raw_grid(path, options);
-    else
-        throw Error(where + ": unknown volume grid extension '" + ext +
-                    "' (expected .vdb, .nvdb or an instant-ngp {W}x{H}x{D}_*.bin)");
+    try {
+        if (ext == ".vdb")
+            g = read_openvdb_grid(path);
+        else if (ext == ".nvdb")
+            g = read_nanovdb_grid(path);
+        else if (ext == ".bin")
+            g = read_raw_grid(path, options);
+        else
+            throw Error(where + ": unknown volume grid extension '" + ext +
+                        "' (expected .vdb, .nvdb or an instant-ngp {W}x{H}x{D}_*.bin)");
+    } catch (const std::bad_alloc&) {
+        // The dense box is at most k_max_dense_voxels (2^28 voxels, 4 GiB of density and colour).
+        throw Error(where + ": the grid's dense box (up to " +
+                    format_bytes(double(k_max_dense_voxels) * 16.0) +
+                    ") needs more memory than this machine could allocate: bake it with a smaller --res");
+    }
     sanitize(g);
     if (ext == ".bin") pad_clamp_to_edge(g);
     spdlog::debug("{}: volume grid {}x{}x{}", where, g.nx, g.ny, g.nz);

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "core/json_file.h"
 #include "nerf/model_file.h"
 
 namespace npt::media {
@@ -29,8 +30,8 @@ VolumeDesc parse_volume_desc(const std::string& extras_json, const std::string& 
     const char* expected =
         " (expected extras {\"volume\": {\"file\": \"...\", \"density_scale\": 1, \"emission_scale\": 1}})";
     if (extras_json.empty()) throw Error(where + ": the `volume` cube has no extras" + expected);
-    nlohmann::json j = nlohmann::json::parse(extras_json, nullptr, false);
-    if (j.is_discarded() || !j.is_object() || !j.contains("volume") || !j["volume"].is_object())
+    const nlohmann::json j = parse_json_text(extras_json, where + ": extras");
+    if (!j.is_object() || !j.contains("volume") || !j["volume"].is_object())
         throw Error(where + ": extras has no `volume` object" + expected);
     const auto& v = j["volume"];
     VolumeDesc d;

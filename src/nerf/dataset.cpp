@@ -2,6 +2,7 @@
 // milliseconds), then decodes the images in parallel straight into one RGBA buffer.
 #include "nerf/dataset.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
@@ -16,6 +17,8 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/json_file.h"
+#include "core/memory.h"
 
 namespace npt::nerf {
 
@@ -88,7 +91,44 @@ Mat4 parse_matrix(const json& frame, const std::string& where) {
                             ", column " + std::to_string(c));
             out.m[r][c] = d;
         }
+    // A camera-to-world pose: affine (bottom row 0 0 0 1), with an invertible 3x3 part (columns of nonzero
+    // length, not in one plane) and a position a float can hold. instant-ngp reads the matrix as it is.
+    const double bottom =
+        std::abs(out.m[3][0]) + std::abs(out.m[3][1]) + std::abs(out.m[3][2]) + std::abs(out.m[3][3] - 1.0);
+    if (!(bottom <= 1e-6))
+        throw Error(where + ": 'transform_matrix' is not a pose: its last row must be [0, 0, 0, 1]");
+    double norms = 1;
+    for (int c = 0; c < 3; ++c)
+        norms *= std::sqrt(out.m[0][c] * out.m[0][c] + out.m[1][c] * out.m[1][c] + out.m[2][c] * out.m[2][c]);
+    if (!(std::isfinite(norms) && std::abs(out.determinant3()) > 1e-6 * norms))
+        throw Error(where + ": 'transform_matrix' is not invertible (its rotation part is zero or flat)");
+    if (!is_finite(out.transform_point(Vec3(0.0f))))
+        throw Error(where + ": 'transform_matrix' puts the camera beyond the range of a float");
     return out;
+}
+
+// The lens must be invertible over the whole image: every pixel is undistorted (Newton, as the ray generator
+// does) and distorted back to within a hundredth of a pixel, on a 9x9 grid from corner to corner.
+// Coefficients such as k1 = 1e30 fold the image over itself; the ray of such a pixel would be meaningless.
+void check_lens(const Camera& c, const std::string& where) {
+    const LensDistortion lens = c.distortion();
+    if (lens.is_identity()) return;
+    constexpr int k_grid = 9;
+    for (int j = 0; j < k_grid; ++j)
+        for (int i = 0; i < k_grid; ++i) {
+            const double px = double(c.width) * i / (k_grid - 1), py = double(c.height) * j / (k_grid - 1);
+            const double xd = (px - c.cx) / c.fx, yd = (py - c.cy) / c.fy;
+            double x, y, xr, yr;
+            undistort(lens, xd, yd, &x, &y);
+            distort(lens, x, y, &xr, &yr);
+            const double err = std::hypot((xr - xd) * c.fx, (yr - yd) * c.fy);
+            if (!(err <= 0.01))
+                throw Error(
+                    fmt::format("{}: 'k1', 'k2', 'p1', 'p2' = {:g}, {:g}, {:g}, {:g} do not describe a lens "
+                                "that can be inverted over the image (pixel ({:g}, {:g}) cannot be "
+                                "undistorted)",
+                                where, lens.k1, lens.k2, lens.p1, lens.p2, px, py));
+        }
 }
 
 // `file_path` as given, then with the extensions exporters leave off (NeRF-synthetic writes "./train/r_0").
@@ -108,15 +148,7 @@ fs::path resolve_image(const fs::path& base_dir, const std::string& file_path, c
 json read_json(const fs::path& path) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) throw Error(path.string() + ": file not found");
-    std::ifstream f(path, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    if (!f && !f.eof()) throw Error(path.string() + ": cannot read file");
-    try {
-        return json::parse(ss.str());
-    } catch (const json::exception& e) {  // parse errors, and number overflow such as 1e999
-        throw Error(path.string() + ": malformed JSON (" + e.what() + ")");
-    }
+    return read_json_file(path);
 }
 
 fs::path json_path(const fs::path& folder_or_json, const std::string& split) {
@@ -140,16 +172,27 @@ Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, c
     if (!root.is_object()) throw Error(file + ": expected a JSON object at the top level");
 
     Dataset ds;
+    ds.source = path;
     if (auto v = opt_number(root, "aabb_scale", file)) {
-        if (*v <= 0) throw Error(file + ": 'aabb_scale' must be positive");
+        // instant-ngp's limit (8 cascades); each cascade is a 128^3 occupancy grid.
+        if (!(*v > 0 && *v <= k_max_aabb_scale))
+            throw Error(file + ": 'aabb_scale' must be in (0, " + std::to_string(int(k_max_aabb_scale)) +
+                        "], got " + json(*v).dump());
         ds.aabb_scale = float(*v);
     }
-    if (auto v = opt_number(root, "scale", file)) ds.scale = float(*v);
+    if (auto v = opt_number(root, "scale", file)) {
+        // Positions are multiplied by it: 0 puts every camera at one point, a negative value mirrors the
+        // world.
+        if (!(*v > 0) || !std::isfinite(float(*v)))
+            throw Error(file + ": 'scale' must be a positive number, got " + json(*v).dump());
+        ds.scale = float(*v);
+    }
     if (auto it = root.find("offset"); it != root.end()) {
         if (!it->is_array() || it->size() != 3 || !(*it)[0].is_number() || !(*it)[1].is_number() ||
             !(*it)[2].is_number())
             throw Error(file + ": 'offset' must be an array of 3 numbers");
         ds.offset = Vec3((*it)[0].get<float>(), (*it)[1].get<float>(), (*it)[2].get<float>());
+        if (!is_finite(ds.offset)) throw Error(file + ": 'offset' must be 3 finite numbers");
     }
 
     auto frames_it = root.find("frames");
@@ -190,6 +233,8 @@ Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, c
         s.k2 = float(frame_or_global(fr, root, "k2", where, file).value_or(0.0));
         s.p1 = float(frame_or_global(fr, root, "p1", where, file).value_or(0.0));
         s.p2 = float(frame_or_global(fr, root, "p2", where, file).value_or(0.0));
+        for (float k : {s.k1, s.k2, s.p1, s.p2})
+            if (!std::isfinite(k)) throw Error(where + ": 'k1', 'k2', 'p1' and 'p2' must fit a float");
         s.image = resolve_image(base_dir, s.file_path, where);
     }
 
@@ -240,7 +285,11 @@ Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, c
             throw Error(file + ": " + std::to_string(n) + " frames of " + std::to_string(ds.width) + "x" +
                         std::to_string(ds.height) + " need more than the limit of " +
                         std::to_string(k_max_dataset_bytes >> 30) + " GiB of pixel memory");
-        ds.rgba.resize(n * ds.image_bytes());
+        with_memory_context(file + ": " + std::to_string(n) + " frames of " + std::to_string(ds.width) + "x" +
+                                std::to_string(ds.height),
+                            double(n) * double(ds.image_bytes()),
+                            "use fewer or smaller images (--downscale shrinks them only after loading)",
+                            [&] { ds.rgba.resize(n * ds.image_bytes()); });
         store(0, first);
     }
     // Errors are kept per frame and the first is reported, so the message does not depend on thread timing.
@@ -257,6 +306,7 @@ Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, c
 
     ds.cameras.resize(n);
     ds.names.resize(n);
+    ds.image_files.resize(n);
     for (size_t i = 0; i < n; ++i) {
         const FrameSpec& s = specs[i];
         const std::string where = file + ": " + frame_label(i, s.file_path);
@@ -279,7 +329,13 @@ Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, c
         c.k2 = s.k2;
         c.p1 = s.p1;
         c.p2 = s.p2;
+        if (!std::isfinite(c.fx) || !std::isfinite(c.fy) || !std::isfinite(c.cx) || !std::isfinite(c.cy) ||
+            !(c.fx > 0) || !(c.fy > 0))
+            throw Error(where + ": the intrinsics do not fit a float (fx " + json(fx).dump() + ", fy " +
+                        json(fy).dump() + ")");
+        check_lens(c, where);
         ds.names[i] = s.file_path;
+        ds.image_files[i] = s.image;
     }
     spdlog::debug("{}: {} frames of {}x{}", file, n, ds.width, ds.height);
     return ds;

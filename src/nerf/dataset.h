@@ -32,6 +32,8 @@ struct Camera {
 struct Dataset {
     std::vector<Camera> cameras;
     std::vector<std::string> names;  // each frame's `file_path` as written in the json
+    std::filesystem::path source;    // the transforms.json read
+    std::vector<std::filesystem::path> image_files;  // each frame's image as found on disk
     // All images, 8-bit RGBA, row-major from the top-left, image after image: 4 bytes per pixel keeps a few
     // hundred training views in memory where float RGBA would need four times as much. Pixels are the stored
     // (sRGB-encoded) values, not linearised: NeRFs are trained on them as they are.
@@ -53,6 +55,9 @@ using ProgressFn = std::function<void(size_t done, size_t total)>;
 // Largest total pixel memory a data set may need; checked before allocating, so a json with absurd sizes
 // fails with a message instead of taking the machine's memory.
 constexpr size_t k_max_dataset_bytes = size_t(32) << 30;
+
+// instant-ngp's largest aabb_scale (8 occupancy cascades).
+constexpr double k_max_aabb_scale = 128;
 
 // Reads `folder_or_json/transforms_{split}.json` when given a folder (`transforms.json` when split is empty, or
 // when split is "train" and the folder has transforms.json but no transforms_train.json),

@@ -19,6 +19,8 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/json_file.h"
+#include "core/temp_file.h"
 
 namespace npt::nerf {
 
@@ -115,6 +117,7 @@ class AtomicWriter {
   public:
     explicit AtomicWriter(const fs::path& path)
         : m_path(path), m_tmp(path.string() + ".tmp-" + std::to_string(::getpid())) {
+        remove_stale_temporaries(path);  // of killed writers (core/temp_file.h)
         m_file = std::fopen(m_tmp.c_str(), "wb");
         if (!m_file)
             throw Error(m_path.string() + ": cannot create the temporary file " + m_tmp.string() + " (" +
@@ -451,12 +454,7 @@ NerfModel load_model(const fs::path& path) {
         if (!present) throw in.error(std::string("missing section '") + tag + "'");
 
     NerfModel model;
-    json j;
-    try {
-        j = json::parse(*raw.conf);
-    } catch (const json::exception& e) {
-        throw in.error(std::string("stored config is malformed JSON (") + e.what() + ")");
-    }
+    const json j = parse_json_text(*raw.conf, in.name() + ": stored config");
     model.config = config_from_json(j, in.name() + ": stored config");
 
     model.aabb_scale = raw.aabb_scale;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/json_file.h"
 #include "nerf/mlp.h"
 
 namespace npt::nerf {
@@ -302,17 +303,7 @@ json config_to_json(const NerfConfig& c) {
 NerfConfig load_config(const std::string& path, const NerfConfig& base) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": file not found");
-    std::ifstream f(path, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    if (!f && !f.eof()) throw Error(path + ": cannot read file");
-    json j;
-    try {
-        j = json::parse(ss.str());
-    } catch (const json::exception& e) {  // syntax errors, and number overflow such as 1e999
-        throw Error(path + ": malformed JSON (" + e.what() + ")");
-    }
-    return config_from_json(j, path, base);
+    return config_from_json(read_json_file(path), path, base);
 }
 
 }  // namespace npt::nerf

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/rng.h"
 
 namespace npt::nerf {
@@ -68,7 +69,10 @@ NerfModel create_model(const NerfConfig& config, float aabb_scale, const Mat4& w
     m.aabb_scale = aabb_scale;
     m.world_to_model = world_to_model;
     const NerfLayout l = m.layout();
-    m.params.resize(l.total);
+    with_memory_context(
+        "the model's " + std::to_string(l.total) + " parameters", double(l.total) * 4.0,
+        "lower encoding.log2_table_size, encoding.levels or encoding.features_per_level in the config",
+        [&] { m.params.resize(l.total); });
     Pcg32 rng(config.training.seed, 0x5eed);
     init_mlp(l.density, m.params.data() + l.density_offset, rng);
     init_mlp(l.color, m.params.data() + l.color_offset, rng);

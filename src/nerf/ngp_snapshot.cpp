@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "core/json_file.h"
 #include "nerf/ngp_hash_grid.h"
 
 namespace npt::nerf {
@@ -171,6 +172,7 @@ std::vector<uint8_t> inflate_all(const std::vector<uint8_t>& in, const std::stri
 
 json parse_msgpack(const std::vector<uint8_t>& bytes, const std::string& source) {
     if (bytes.empty()) throw Error(source + ": empty file");
+    check_msgpack_depth(bytes.data(), bytes.size(), source);  // nlohmann's reader recurses once per level
     try {
         return json::from_msgpack(bytes);
     } catch (const json::exception& e) {

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/rng.h"
 #include "nerf/composite.h"
 #include "nerf/field_batch.h"
@@ -28,7 +29,9 @@ struct TrainRay {
 
 }  // namespace
 
-Trainer::Trainer(NerfModel& model, const Dataset& data)
+// Function-try-blocks: the optimizer state (four copies of the parameters) and a step's buffers (per sample)
+// are the allocations a config decides; a bad_alloc says which setting to lower.
+Trainer::Trainer(NerfModel& model, const Dataset& data) try
     : m_model(model),
       m_data(data),
       m_layout(model.layout()),
@@ -51,6 +54,12 @@ Trainer::Trainer(NerfModel& model, const Dataset& data)
     const double stretch = double(k_ngp_batch_samples) / double(model.config.training.batch_samples);
     m_occupancy_interval =
         uint64_t(std::max(1.0, std::round(double(model.config.occupancy.update_interval) * stretch)));
+} catch (const std::bad_alloc&) {
+    const double total = double(model.layout().total);
+    throw Error("training state (the model's " + std::to_string(size_t(total)) +
+                " parameters, 5 copies) needs " + format_bytes(total * 4.0 * 5.0) +
+                " of memory, more than this machine could allocate: lower encoding.log2_table_size or "
+                "encoding.levels in the config");
 }
 
 void Trainer::sync_model() {
@@ -94,7 +103,7 @@ StepStats Trainer::gradient(std::vector<float>& grads) {
     return stats;
 }
 
-StepStats Trainer::compute_gradient() {
+StepStats Trainer::compute_gradient() try {
     const auto t0 = std::chrono::steady_clock::now();
     auto lap = [last = t0]() mutable {
         const auto now = std::chrono::steady_clock::now();
@@ -266,6 +275,11 @@ StepStats Trainer::compute_gradient() {
     stats.marched = uint32_t(n_samples);
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return stats;
+} catch (const std::bad_alloc&) {
+    throw Error(
+        "a training step of " + std::to_string(m_model.config.training.batch_samples) +
+        " samples needs more memory than this machine could allocate: lower training.batch_samples or "
+        "training.max_rays_per_batch in the config");
 }
 
 void Trainer::update_occupancy(uint64_t step) {

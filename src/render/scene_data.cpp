@@ -1,5 +1,6 @@
 #include "render/scene_data.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
@@ -43,19 +44,42 @@ CameraView make_camera_view(const scene::Scene& scene, int width, int height) {
         c.tan_half_fov_y = std::tan(0.5f * sc.yfov);
         return c;
     }
-    // No camera: look at the scene's bounding box from +Z, far enough to frame it with a 40 degree field of
-    // view.
-    Vec3 lo(INFINITY), hi(-INFINITY);
-    for (const auto& m : scene.meshes)
-        for (const Vec3& p : m.positions) {
-            lo = vmin(lo, p);
-            hi = vmax(hi, p);
-        }
-    if (!(lo.x <= hi.x)) lo = hi = Vec3(0.0f);
-    Vec3 centre = (lo + hi) * 0.5f;
-    float radius = std::max(0.5f * length(hi - lo), 1e-3f);
+    // No camera: look at the scene's bounding box (meshes and volume cubes) down -Z from +Z, far enough to
+    // frame it with a 40 degree field of view. Bounds in double: a box of float coordinates near the float
+    // limit has a diagonal no float can hold. Every scene shape must give a finite, valid view: empty, a
+    // point, a line, a flat one, a huge one, one far from the origin.
+    c.right = Vec3(1, 0, 0);
+    c.up = Vec3(0, 1, 0);
+    c.forward = Vec3(0, 0, -1);
     c.tan_half_fov_y = std::tan(0.5f * 40.0f * k_pi / 180.0f);
-    c.position = centre + Vec3(0, 0, radius / c.tan_half_fov_y * 1.1f + radius);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    const auto grow = [&](Vec3 p) {
+        if (!is_finite(p)) return;
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], double(p[k]));
+            hi[k] = std::max(hi[k], double(p[k]));
+        }
+    };
+    for (const auto& m : scene.meshes)
+        for (const Vec3& p : m.positions) grow(p);
+    for (const auto& v : scene.volumes)
+        for (int corner = 0; corner < 8; ++corner)
+            grow(v.local_to_world.transform_point(Vec3(corner & 1 ? v.local_max.x : v.local_min.x,
+                                                       corner & 2 ? v.local_max.y : v.local_min.y,
+                                                       corner & 4 ? v.local_max.z : v.local_min.z)));
+    if (!(lo[0] <= hi[0])) lo[0] = lo[1] = lo[2] = hi[0] = hi[1] = hi[2] = 0.0;
+    double centre[3], diagonal2 = 0, far = 0;
+    for (int k = 0; k < 3; ++k) {
+        centre[k] = 0.5 * (lo[k] + hi[k]);
+        diagonal2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+        far = std::max(far, std::abs(centre[k]));
+    }
+    // At least a millimetre, and enough float steps at the centre's magnitude that the camera does not sit
+    // on it; at most what keeps the camera inside the world Embree accepts (scene::k_max_world_coordinate).
+    const double radius = std::clamp(0.5 * std::sqrt(diagonal2), std::max(1e-3, 1e-5 * far),
+                                     double(scene::k_max_world_coordinate));
+    const double distance = radius / double(c.tan_half_fov_y) * 1.1 + radius;
+    c.position = Vec3(float(centre[0]), float(centre[1]), float(centre[2] + distance));
     return c;
 }
 

@@ -9,6 +9,8 @@
 #pragma GCC diagnostic pop
 
 #include <map>
+#include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -20,7 +22,22 @@ namespace npt::scene::gltf {
 struct Context {
     const tinygltf::Model& model;
     std::string file;  // the path as given, prefix of every message
+    mutable std::set<std::string> clamped;  // fields already warned about (one warning per field and file)
 };
+
+// Clamps `value` into [lo, hi] (the glTF spec's range for `field`, e.g.
+// "pbrMetallicRoughness.roughnessFactor"), warning once per field and file when it had to: Blender's rule for
+// factors the spec bounds.
+float clamp_field(const Context& ctx, float value, float lo, float hi, const std::string& field,
+                  const std::string& owner);
+Rgb clamp_field(const Context& ctx, Rgb value, float lo, float hi, const std::string& field,
+                const std::string& owner);
+
+// Checks the glTF JSON document against the parts of the glTF 2.0 schema and of the KHR extensions we read
+// (types, required fields, indices that exist, the spec's value ranges); throws npt::Error naming the file
+// and the field's path, e.g. "scene.gltf: meshes[0].primitives: expected an array of objects, got an
+// integer".
+void check_schema(const nlohmann::json& doc, const std::string& file);
 
 // Accessor readers: validate the accessor, its buffer view and buffer (bounds, types, counts) before reading.
 // `what` says what the accessor is for, e.g. "POSITION of mesh 'floor'".

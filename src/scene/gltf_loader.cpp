@@ -5,10 +5,13 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <set>
+#include <sstream>
 
 #include "core/error.h"
+#include "core/json_file.h"
 #include "scene/gltf_internal.h"
 #include "scene/mesh_utils.h"
 
@@ -32,6 +35,54 @@ std::string one_line(std::string s) {
     return s;
 }
 
+// The document's JSON: the whole file, or a .glb's first chunk (12-byte header, then chunk length, type
+// 'JSON', data), read after checking the lengths against the file size.
+std::string json_text(const fs::path& path, bool binary) {
+    const std::string file = path.string();
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw Error(file + ": cannot open");
+    if (!binary) {
+        std::stringstream ss;
+        ss << f.rdbuf();
+        return ss.str();
+    }
+    std::error_code ec;
+    const uintmax_t size = fs::file_size(path, ec);
+    unsigned char header[20] = {};
+    if (ec || size < 20 || !f.read(reinterpret_cast<char*>(header), 20))
+        throw Error(file + ": truncated GLB header (" + std::to_string(size) + " bytes)");
+    const auto u32 = [&](int at) {
+        return uint32_t(header[at]) | uint32_t(header[at + 1]) << 8 | uint32_t(header[at + 2]) << 16 |
+               uint32_t(header[at + 3]) << 24;
+    };
+    if (u32(4) != 2) throw Error(file + ": GLB version " + std::to_string(u32(4)) + " (expected 2)");
+    if (u32(16) != 0x4E4F534Au) throw Error(file + ": GLB's first chunk is not JSON");
+    const uint32_t length = u32(12);
+    if (length == 0 || uint64_t(length) > size - 20)
+        throw Error(file + ": GLB JSON chunk of " + std::to_string(length) +
+                    " bytes does not fit the file (" + std::to_string(size) + " bytes)");
+    std::string text(length, '\0');
+    if (!f.read(text.data(), std::streamsize(length))) throw Error(file + ": cannot read the GLB JSON chunk");
+    return text;
+}
+
+// Buffers and images a glTF names by URI are read only from regular files: a URI naming /dev/stdin or a FIFO
+// would block forever (tinygltf's own FileExists already opens it), /dev/zero never ends. To tinygltf anything
+// else does not exist.
+bool regular_file_exists(const std::string& path, void*) {
+    std::error_code ec;
+    return fs::is_regular_file(path, ec);
+}
+
+bool read_regular_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) {
+        if (err) *err += "File is not a regular file: " + path + "\n";
+        return false;
+    }
+    return tinygltf::ReadWholeFile(out, err, path, nullptr);
+}
+
 tinygltf::Model parse(const fs::path& path) {
     const std::string file = path.string();
     std::error_code ec;
@@ -39,6 +90,8 @@ tinygltf::Model parse(const fs::path& path) {
     if (fs::file_size(path, ec) == 0) throw Error(file + ": file is empty");
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&keep_encoded_image, nullptr);
+    loader.SetFsCallbacks({&regular_file_exists, &tinygltf::ExpandFilePath, &read_regular_file,
+                           &tinygltf::WriteWholeFile, nullptr});
     loader.SetStoreOriginalJSONForExtrasAndExtensions(true);
     tinygltf::Model model;
     std::string err, warn;
@@ -49,6 +102,9 @@ tinygltf::Model parse(const fs::path& path) {
     char magic[4] = {0, 0, 0, 0};
     std::ifstream(path, std::ios::binary).read(magic, 4);
     const bool binary = std::string(magic, 4) == "glTF";
+    // Our own pass over the JSON first: nesting depth (tinygltf converts `extras` recursively) and the schema
+    // (tinygltf drops values of the wrong type silently).
+    gltf::check_schema(parse_json_text(json_text(path, binary), file), file);
     bool ok = false;
     try {
         ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, file)
@@ -72,14 +128,25 @@ tinygltf::Model parse(const fs::path& path) {
     return model;
 }
 
-Mat4 local_transform(const tinygltf::Node& n, const std::string& where) {
+Mat4 local_transform(const Context& ctx, const tinygltf::Node& n, const std::string& label) {
+    const std::string where = ctx.file + ": node '" + label + "'";
     if (n.matrix.size() == 16) return Mat4::from_column_major(n.matrix.data());
     if (!n.matrix.empty()) throw Error(where + ": matrix must have 16 numbers");
     Mat4 t, r, s;
     if (n.translation.size() == 3)
         t = Mat4::translation(n.translation[0], n.translation[1], n.translation[2]);
-    if (n.rotation.size() == 4)
+    if (n.rotation.size() == 4) {
+        // The spec asks for a unit quaternion; exporters round. A zero one was refused by check_schema;
+        // others are normalised (as Blender does), with one warning per file when clearly not unit.
+        const double norm = std::sqrt(n.rotation[0] * n.rotation[0] + n.rotation[1] * n.rotation[1] +
+                                      n.rotation[2] * n.rotation[2] + n.rotation[3] * n.rotation[3]);
+        if (std::abs(norm - 1.0) > 1e-3 && ctx.clamped.insert("rotation").second)
+            spdlog::warn(
+                "{}: node '{}': rotation quaternion has length {}, normalised (further ones in this file "
+                "are not reported)",
+                ctx.file, label, norm);
         r = Mat4::rotation_quat(n.rotation[0], n.rotation[1], n.rotation[2], n.rotation[3]);
+    }
     if (n.scale.size() == 3) s = Mat4::scale(n.scale[0], n.scale[1], n.scale[2]);
     return t * r * s;
 }
@@ -105,7 +172,7 @@ class Flattener {
                         " is its own ancestor (cycle in children)");
         const auto& n = model.nodes[size_t(index)];
         const std::string label = n.name.empty() ? fmt::format("#{}", index) : n.name;
-        const Mat4 world = parent * local_transform(n, m_ctx.file + ": node '" + label + "'");
+        const Mat4 world = parent * local_transform(m_ctx, n, label);
         if (!world.is_finite()) throw Error(m_ctx.file + ": node '" + label + "': transform is not finite");
         if (n.mesh >= 0) mesh(n, index, label, world);
         if (n.camera >= 0) {
@@ -178,6 +245,7 @@ class Flattener {
                 mesh_bounds(mesh, v.local_min, v.local_max);
                 v.extras_json = model.nodes[size_t(node_index)].extras_json_string;
                 v.declared_in = m_ctx.file;
+                check_volume_placement(v, m_ctx.file + ": volume '" + v.name + "' (node '" + label + "')");
                 m_scene.volumes.push_back(std::move(v));
                 continue;
             }
@@ -187,7 +255,7 @@ class Flattener {
                              label);
                 continue;
             }
-            transform_mesh(mesh, world);
+            transform_mesh(mesh, world, where);
             m_scene.meshes.push_back(std::move(mesh));
         }
     }
@@ -214,17 +282,24 @@ class Flattener {
         } else {
             throw Error(m_ctx.file + ": light '" + l.name + "': unknown type '" + gl.type + "'");
         }
-        const Rgb color = gl.color.size() >= 3
-                              ? Rgb(float(gl.color[0]), float(gl.color[1]), float(gl.color[2]))
-                              : Rgb(1.0f);
+        const Rgb color =
+            gl.color.size() >= 3
+                ? gltf::clamp_field(m_ctx, Rgb(float(gl.color[0]), float(gl.color[1]), float(gl.color[2])),
+                                    0.0f, 1.0f, "KHR_lights_punctual.color", "light '" + l.name + "'")
+                : Rgb(1.0f);
         l.intensity = color * float(gl.intensity);
         l.position = world.transform_point(Vec3(0.0f));
         const Vec3 d = world.transform_vector(Vec3(0, 0, -1));
         if (!(length(d) > 0.0f))
             throw Error(m_ctx.file + ": node '" + label + "': light direction is degenerate");
         l.direction = normalize(d);
-        if (!is_finite(l.intensity) || !is_finite(l.position))
-            throw Error(m_ctx.file + ": light '" + l.name + "': colour or intensity is not finite");
+        if (!is_finite(l.direction))
+            throw Error(m_ctx.file + ": node '" + label + "': light direction is not finite as a float");
+        if (!is_finite(l.intensity))
+            throw Error(m_ctx.file + ": light '" + l.name +
+                        "': colour or intensity is not finite as a float");
+        check_world_point(l.position, m_ctx.file + ": light '" + l.name + "' (node '" + label + "')",
+                          "position");
         m_scene.lights.push_back(l);
     }
 
@@ -244,6 +319,7 @@ Camera make_camera(const Context& ctx, const CameraCandidate& c) {
     Camera cam;
     cam.name = label;
     cam.position = c.world.transform_point(Vec3(0.0f));
+    check_world_point(cam.position, ctx.file + ": camera '" + label + "'", "position");
     // Strip scale and shear: forward from -Z, right from X made orthogonal to it, up completes the frame.
     Vec3 f = -column(c.world, 2), x = column(c.world, 0);
     if (!(length(f) > 0.0f)) throw Error(ctx.file + ": camera '" + label + "': node transform is degenerate");
@@ -258,6 +334,8 @@ Camera make_camera(const Context& ctx, const CameraCandidate& c) {
     cam.aspect = float(gc.perspective.aspectRatio);
     if (!(cam.yfov > 0.0f && cam.yfov < k_pi))
         throw Error(ctx.file + ": camera '" + label + "': perspective.yfov must be in (0, pi)");
+    if (!(cam.aspect >= 0.0f && std::isfinite(cam.aspect)))
+        throw Error(ctx.file + ": camera '" + label + "': perspective.aspectRatio must be positive");
     return cam;
 }
 
@@ -266,7 +344,8 @@ void apply_extras(const Context& ctx, const tinygltf::Value& extras, Scene& scen
     auto get_int = [&](const char* key, int& out, int lo) {
         if (!extras.Has(key)) return;
         const auto& v = extras.Get(key);
-        if (!v.IsNumber() || v.GetNumberAsDouble() < lo || v.GetNumberAsDouble() > 1e9)
+        if (!v.IsNumber() || v.GetNumberAsDouble() < lo || v.GetNumberAsDouble() > 1e9 ||
+            v.GetNumberAsDouble() != std::floor(v.GetNumberAsDouble()))
             throw Error(ctx.file + ": scene extras." + key +
                         ": expected an integer >= " + std::to_string(lo));
         out = int(v.GetNumberAsDouble());
@@ -281,6 +360,8 @@ void apply_extras(const Context& ctx, const tinygltf::Value& extras, Scene& scen
         for (int k = 0; ok && k < 3; ++k) ok = b.Get(k).IsNumber();
         if (!ok) throw Error(ctx.file + ": scene extras.background: expected an array of 3 numbers");
         for (int k = 0; k < 3; ++k) scene.environment.color[k] = float(b.Get(k).GetNumberAsDouble());
+        if (!is_finite(scene.environment.color) || min_component(scene.environment.color) < 0)
+            throw Error(ctx.file + ": scene extras.background: expected 3 finite radiances >= 0");
     }
 }
 
@@ -289,6 +370,8 @@ void apply_extras(const Context& ctx, const tinygltf::Value& extras, Scene& scen
 void load_gltf(const fs::path& path, const LoadOptions& options, Scene& scene, const Mat4& placement) {
     const tinygltf::Model model = parse(path);
     const Context ctx{model, path.string()};
+    for (const auto& b : model.buffers)
+        if (!b.uri.empty() && b.uri.rfind("data:", 0) != 0) scene.files.push_back(path.parent_path() / b.uri);
 
     std::vector<int> roots;
     if (!model.scenes.empty()) {

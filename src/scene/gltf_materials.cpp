@@ -27,6 +27,24 @@ Rgb rgb(const std::vector<double>& v, Rgb fallback) {
 
 }  // namespace
 
+float clamp_field(const Context& ctx, float value, float lo, float hi, const std::string& field,
+                  const std::string& owner) {
+    if (value >= lo && value <= hi) return value;
+    const float clamped = value < lo ? lo : hi;
+    if (ctx.clamped.insert(field).second)
+        spdlog::warn(
+            "{}: {}: {} {} is outside [{}, {}], clamped to {} (further clamps of {} in this file are "
+            "not reported)",
+            ctx.file, owner, field, value, lo, hi, clamped, field);
+    return clamped;
+}
+
+Rgb clamp_field(const Context& ctx, Rgb value, float lo, float hi, const std::string& field,
+                const std::string& owner) {
+    for (int k = 0; k < 3; ++k) value[k] = clamp_field(ctx, value[k], lo, hi, field, owner);
+    return value;
+}
+
 MaterialTable::MaterialTable(const Context& ctx, Scene& scene) : m_ctx(ctx), m_scene(scene) {
     // Reserve one slot per glTF material so that indices are a fixed offset; filled below on first use.
     m_offset = int(scene.materials.size());
@@ -37,34 +55,47 @@ MaterialTable::MaterialTable(const Context& ctx, Scene& scene) : m_ctx(ctx), m_s
         const std::string mname = gm.name.empty() ? fmt::format("#{}", i) : gm.name;
         mat.name = mname;
         const auto& pbr = gm.pbrMetallicRoughness;
-        mat.base_color = rgb(pbr.baseColorFactor, Rgb(1.0f));
-        mat.metallic = float(pbr.metallicFactor);
-        mat.roughness = float(pbr.roughnessFactor);
-        mat.emission = rgb(gm.emissiveFactor, Rgb(0.0f));
+        // Factors the spec bounds are clamped as Blender does, one warning per field (types and the other
+        // ranges were checked by check_schema); docs/formats.md, "glTF 2.0", lists the rule per field.
+        const std::string owner = "material '" + mname + "'";
+        const auto unit = [&](double v, const char* field) {
+            return clamp_field(ctx, float(v), 0.0f, 1.0f, field, owner);
+        };
+        mat.base_color = clamp_field(ctx, rgb(pbr.baseColorFactor, Rgb(1.0f)), 0.0f, 1.0f,
+                                     "pbrMetallicRoughness.baseColorFactor", owner);
+        mat.metallic = unit(pbr.metallicFactor, "pbrMetallicRoughness.metallicFactor");
+        mat.roughness = unit(pbr.roughnessFactor, "pbrMetallicRoughness.roughnessFactor");
+        mat.emission =
+            clamp_field(ctx, rgb(gm.emissiveFactor, Rgb(0.0f)), 0.0f, 1.0f, "emissiveFactor", owner);
         if (auto* e = extension(gm, "KHR_materials_emissive_strength"))
             mat.emission *= float(number(*e, "emissiveStrength", 1.0));
         if (auto* e = extension(gm, "KHR_materials_specular")) {
-            mat.specular = float(number(*e, "specularFactor", 1.0));
+            mat.specular = unit(number(*e, "specularFactor", 1.0), "KHR_materials_specular.specularFactor");
             if (e->Has("specularColorFactor") && e->Get("specularColorFactor").IsArray() &&
                 e->Get("specularColorFactor").ArrayLen() >= 3) {
                 const auto& c = e->Get("specularColorFactor");
                 for (int k = 0; k < 3; ++k)
                     mat.specular_color[k] = c.Get(k).IsNumber() ? float(c.Get(k).GetNumberAsDouble()) : 1.0f;
+                mat.specular_color = clamp_field(ctx, mat.specular_color, 0.0f, INFINITY,
+                                                 "KHR_materials_specular.specularColorFactor", owner);
             }
             if (e->Has("specularTexture") || e->Has("specularColorTexture"))
                 spdlog::warn("{}: material '{}': specular textures are ignored", ctx.file, mname);
         }
         if (auto* e = extension(gm, "KHR_materials_transmission")) {
-            mat.transmission = float(number(*e, "transmissionFactor", 0.0));
+            mat.transmission =
+                unit(number(*e, "transmissionFactor", 0.0), "KHR_materials_transmission.transmissionFactor");
             if (e->Has("transmissionTexture"))
                 spdlog::warn("{}: material '{}': transmissionTexture is ignored", ctx.file, mname);
         }
         if (auto* e = extension(gm, "KHR_materials_ior")) mat.ior = float(number(*e, "ior", 1.5));
         mat.double_sided = gm.doubleSided;
         mat.is_volume = gm.name == "volume";
+        // Values beyond float (1e300 is a valid JSON number) end up here.
         if (!is_finite(mat.base_color) || !is_finite(mat.emission) || !std::isfinite(mat.metallic) ||
-            !std::isfinite(mat.roughness) || !std::isfinite(mat.ior) || !std::isfinite(mat.transmission))
-            throw Error(ctx.file + ": material '" + mname + "': a factor is not finite");
+            !std::isfinite(mat.roughness) || !std::isfinite(mat.ior) || !std::isfinite(mat.transmission) ||
+            !std::isfinite(mat.specular) || !is_finite(mat.specular_color))
+            throw Error(ctx.file + ": material '" + mname + "': a factor is not finite as a float");
 
         mat.base_color_texture = texture(pbr.baseColorTexture.index, true, mname, "baseColorTexture");
         mat.metallic_roughness_texture =

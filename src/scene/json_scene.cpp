@@ -10,7 +10,9 @@
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "core/json_file.h"
 #include "scene/gltf_loader.h"
+#include "scene/mesh_utils.h"
 #include "scene/obj_loader.h"
 #include "scene/texture_utils.h"
 
@@ -55,13 +57,17 @@ class Reader {
     }
     Vec3 vec3(const json& v, const std::string& field) const {
         auto d = numbers(v, field, 3);
-        return {float(d[0]), float(d[1]), float(d[2])};
+        const Vec3 out{float(d[0]), float(d[1]), float(d[2])};
+        if (!is_finite(out)) fail(field, "expected 3 numbers within the range of a float");
+        return out;
     }
     void check_keys(const json& obj, const std::string& field,
                     std::initializer_list<const char*> known) const {
-        for (const auto& [key, value] : obj.items())
+        for (const auto& item : obj.items()) {
+            const std::string& key = item.key();  // clang 14 cannot capture a structured binding
             if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
                 spdlog::warn("{}: {}{}: unknown key, ignored", m_file, field.empty() ? "" : field + ".", key);
+        }
     }
     const std::string& file() const { return m_file; }
 
@@ -73,17 +79,7 @@ json parse_file(const fs::path& path) {
     const std::string file = path.string();
     std::error_code ec;
     if (!fs::exists(path, ec)) throw Error(file + ": file not found");
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw Error(file + ": cannot open");
-    std::stringstream ss;
-    ss << f.rdbuf();
-    const std::string text = ss.str();
-    if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw Error(file + ": file is empty");
-    try {
-        return json::parse(text, nullptr, true, /*ignore_comments=*/true);
-    } catch (const json::parse_error& e) {
-        throw Error(file + ": malformed JSON at byte " + std::to_string(e.byte) + " (" + e.what() + ")");
-    }
+    return read_json_file(path, /*comments=*/true);
 }
 
 Mat4 placement(const Reader& r, const json& inc, const std::string& field) {
@@ -122,6 +118,7 @@ void read_volume(const Reader& r, const json& v, const std::string& field, const
     json fill = v;
     for (const char* k : {"name", "translation", "rotation", "scale"}) fill.erase(k);
     vol.extras_json = json{{"volume", fill}}.dump();
+    check_volume_placement(vol, r.file() + ": " + field);
     scene.volumes.push_back(std::move(vol));
 }
 
@@ -145,12 +142,18 @@ void load_include(const Reader& r, const json& inc, const std::string& field, co
     std::string ext = p.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext == ".gltf" || ext == ".glb") {
-        load_gltf(p, LoadOptions{}, scene, m);
-    } else if (ext == ".obj") {
-        load_obj(p, scene, m);
-    } else {
+    scene.files.push_back(p);
+    if (ext != ".gltf" && ext != ".glb" && ext != ".obj")
         r.fail(field, "'" + rel + "': can include only .gltf, .glb and .obj files");
+    // The included file's own error names it and its field; prefixed with ours, the line says which include
+    // (and its placement) led there.
+    try {
+        if (ext == ".obj")
+            load_obj(p, scene, m);
+        else
+            load_gltf(p, LoadOptions{}, scene, m);
+    } catch (const Error& e) {
+        r.fail(field, e.what());
     }
 }
 
@@ -176,6 +179,7 @@ void read_camera(const Reader& r, const json& c, Scene& scene) {
     Camera cam;
     cam.name = "json";
     cam.position = r.vec3(c["position"], "camera.position");
+    check_world_point(cam.position, r.file() + ": camera", "position");
     const Vec3 target = r.vec3(c["look_at"], "camera.look_at");
     const Vec3 up = c.contains("up") ? r.vec3(c["up"], "camera.up") : Vec3(0, 1, 0);
     const Vec3 f = target - cam.position;
@@ -191,7 +195,11 @@ void read_camera(const Reader& r, const json& c, Scene& scene) {
         if (!(deg > 0 && deg < 180)) r.fail("camera.yfov_deg", "expected degrees in (0, 180)");
         cam.yfov = float(deg * 3.14159265358979323846 / 180.0);
     }
-    if (c.contains("aspect")) cam.aspect = float(r.number(c["aspect"], "camera.aspect"));
+    if (c.contains("aspect")) {
+        cam.aspect = float(r.number(c["aspect"], "camera.aspect"));
+        if (!(cam.aspect >= 0.0f) || !std::isfinite(cam.aspect))
+            r.fail("camera.aspect", "expected width / height > 0 (or 0: the image's)");
+    }
     scene.cameras.push_back(cam);
     scene.camera = int(scene.cameras.size()) - 1;
 }
@@ -252,7 +260,10 @@ void load_json_scene(const fs::path& path, const LoadOptions& options, Scene& sc
             read_volume(r, vols[i], "volumes[" + std::to_string(i) + "]", path, scene);
     }
     // The JSON's own settings override whatever the included files said.
-    if (root.contains("background")) scene.environment.color = r.vec3(root["background"], "background");
+    if (root.contains("background")) {
+        scene.environment.color = r.vec3(root["background"], "background");
+        if (min_component(scene.environment.color) < 0) r.fail("background", "radiance must not be negative");
+    }
     if (root.contains("environment")) read_environment(r, root["environment"], dir, scene);
     if (root.contains("render")) read_render(r, root["render"], scene.settings);
     if (!options.camera_name.empty()) {

@@ -1,5 +1,8 @@
 #include "scene/mesh_utils.h"
 
+#include <fmt/format.h>
+
+#include <cmath>
 #include <utility>
 
 #include "core/error.h"
@@ -42,7 +45,47 @@ void generate_smooth_normals(Mesh& mesh) {
     mesh.normals = std::move(n);
 }
 
-void transform_mesh(Mesh& mesh, const Mat4& m) {
+namespace {
+
+bool within_world(Vec3 p) {
+    return is_finite(p) && std::abs(p.x) <= k_max_world_coordinate &&
+           std::abs(p.y) <= k_max_world_coordinate && std::abs(p.z) <= k_max_world_coordinate;
+}
+
+std::string world_problem(Vec3 p) {
+    const std::string xyz = fmt::format("({:g}, {:g}, {:g})", p.x, p.y, p.z);
+    if (!is_finite(p)) return "is not finite in world space " + xyz + ", after the transforms";
+    return fmt::format("is beyond +-{:g} in world space {}, after the transforms (the range rays can reach)",
+                       k_max_world_coordinate, xyz);
+}
+
+}  // namespace
+
+void validate_world_mesh(const Mesh& mesh, const std::string& where) {
+    for (size_t i = 0; i < mesh.positions.size(); ++i)
+        if (!within_world(mesh.positions[i]))
+            throw Error(where + ": position " + std::to_string(i) + " " + world_problem(mesh.positions[i]));
+    for (size_t i = 0; i < mesh.normals.size(); ++i)
+        if (!is_finite(mesh.normals[i]))
+            throw Error(where + ": normal " + std::to_string(i) + " is not finite in world space");
+}
+
+void check_world_point(Vec3 p, const std::string& where, const std::string& what) {
+    if (!within_world(p)) throw Error(where + ": " + what + " " + world_problem(p));
+}
+
+void check_volume_placement(const VolumeInstance& v, const std::string& where) {
+    if (!v.local_to_world.is_finite()) throw Error(where + ": transform is not finite");
+    if (!(std::abs(v.local_to_world.determinant3()) > 1e-30))
+        throw Error(where + ": transform is singular (a zero scale?): the volume cube has no inside");
+    for (int c = 0; c < 8; ++c) {
+        const Vec3 local(c & 1 ? v.local_max.x : v.local_min.x, c & 2 ? v.local_max.y : v.local_min.y,
+                         c & 4 ? v.local_max.z : v.local_min.z);
+        check_world_point(v.local_to_world.transform_point(local), where, "cube corner");
+    }
+}
+
+void transform_mesh(Mesh& mesh, const Mat4& m, const std::string& where) {
     for (auto& p : mesh.positions) p = m.transform_point(p);
     if (!mesh.normals.empty()) {
         const Mat4 inv = m.inverse();
@@ -58,6 +101,7 @@ void transform_mesh(Mesh& mesh, const Mat4& m) {
     if (m.determinant3() < 0.0)
         for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3)
             std::swap(mesh.indices[t + 1], mesh.indices[t + 2]);
+    validate_world_mesh(mesh, where);
 }
 
 void mesh_bounds(const Mesh& mesh, Vec3& lo, Vec3& hi) {

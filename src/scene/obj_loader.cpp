@@ -5,12 +5,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <tuple>
 
 #include "core/error.h"
 #include "core/image_io.h"
 #include "scene/mesh_utils.h"
+#include "scene/obj_syntax.h"
 #include "scene/texture_utils.h"
 
 namespace npt::scene {
@@ -75,12 +78,36 @@ void load_obj(const fs::path& path, Scene& scene, const Mat4& placement) {
     const std::string file = path.string();
     std::error_code ec;
     if (!fs::exists(path, ec)) throw Error(file + ": file not found");
+    // Regular files only, read here: a FIFO or /dev/stdin named as the OBJ or its mtllib would block forever.
+    if (!fs::is_regular_file(path, ec)) throw Error(file + ": not a regular file");
+    const auto read_text = [](const fs::path& p) {
+        std::ifstream f(p, std::ios::binary);
+        if (!f) throw Error(p.string() + ": cannot open");
+        std::stringstream ss;
+        ss << f.rdbuf();
+        return ss.str();
+    };
+    // Our strict pass first (obj_syntax.h): tinyobjloader turns what it cannot parse into 0. Then tinyobjloader
+    // parses the texts we read (the MTL files concatenated), never opening a file itself.
+    const std::string obj_text = read_text(path);
+    std::string mtl_text;
+    for (const std::string& lib : check_obj_text(obj_text, file)) {
+        const fs::path mtl = path.parent_path() / lib;
+        if (!fs::is_regular_file(mtl, ec)) {
+            spdlog::warn("{}: material file '{}' not found (or not a regular file); its materials get the default",
+                         file, mtl.string());
+            continue;
+        }
+        const std::string text = read_text(mtl);
+        check_mtl_text(text, mtl.string());
+        scene.files.push_back(mtl);
+        mtl_text += text + "\n";
+    }
     tinyobj::ObjReaderConfig config;
     config.triangulate = true;
     config.vertex_color = false;
-    config.mtl_search_path = path.parent_path().string();
     tinyobj::ObjReader reader;
-    if (!reader.ParseFromFile(file, config))
+    if (!reader.ParseFromString(obj_text, mtl_text, config))
         throw Error(file + ": " + (reader.Error().empty() ? "cannot parse OBJ" : one_line(reader.Error())));
     if (!reader.Warning().empty()) spdlog::warn("{}: {}", file, one_line(reader.Warning()));
 
@@ -164,11 +191,12 @@ void load_obj(const fs::path& path, Scene& scene, const Mat4& placement) {
                 vol.local_to_world = placement;
                 vol.declared_in = file;
                 mesh_bounds(mesh, vol.local_min, vol.local_max);
+                check_volume_placement(vol, file + ": volume '" + vol.name + "'");
                 scene.volumes.push_back(std::move(vol));
                 continue;
             }
             if (mat.normal_texture >= 0 && mesh.normals.empty()) generate_smooth_normals(mesh);
-            transform_mesh(mesh, placement);
+            transform_mesh(mesh, placement, file + ": shape '" + shape.name + "'");
             scene.meshes.push_back(std::move(mesh));
         }
     }

@@ -21,6 +21,7 @@ Scene load_scene(const std::filesystem::path& path, const LoadOptions& options) 
                    [](unsigned char c) { return char(std::tolower(c)); });
     Scene scene;
     scene.source = path;
+    scene.files.push_back(path);
     if (ext == ".gltf" || ext == ".glb") {
         load_gltf(path, options, scene);
     } else if (ext == ".obj") {

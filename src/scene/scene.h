@@ -12,6 +12,11 @@
 
 namespace npt::scene {
 
+// Every loader checks that world-space data (after all transforms) is finite and within this bound: Embree
+// refuses rays whose origin has a component beyond 1.8e18 (its FLT_LARGE), and the default view and ray
+// offsets need room beyond the scene. Float positions this large have a spacing of 10^9 anyway.
+constexpr float k_max_world_coordinate = 1e16f;
+
 // Linear-light RGBA texels, row 0 at the top of the image (as stored in PNG/EXR), glTF uv (0,0) = top-left.
 struct Texture {
     std::string name;  // file path or "<embedded #i>", for messages
@@ -112,6 +117,9 @@ struct Scene {
     int camera = -1;  // index into cameras; -1: none (a default view is made)
     std::vector<VolumeInstance> volumes;
     RenderSettings settings;
+    // Every scene file read (the scene, included files, MTL files, glTF buffers; textures are in `textures`,
+    // grids in `volumes`), so that a command can refuse to write over one of them.
+    std::vector<std::filesystem::path> files;
 
     size_t triangle_count() const;
 };

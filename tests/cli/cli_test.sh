@@ -242,6 +242,32 @@ grep -qE "^frame_00004\.png\.\.frame_00007\.png +4 +0\.000 +0\.000 +0\.000 +0\.0
     fail "pose-error --pieces: no exact row for the second piece: $(cat "$tmp/out")"
 grep -q '"pieces"' "$tmp/pieces.json" || fail "pose-error --pieces --json: no 'pieces'"
 
+# Reliability (issue 15). A scene without a camera renders from the default view (it aborted inside Embree).
+printf 'v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n' >"$tmp/tri.obj"
+run -q render "$tmp/tri.obj" -o "$tmp/tri.exr" --res 8x8 --spp 1 --threads 1
+[[ $rc -eq 0 && -s "$tmp/tri.exr" ]] || fail "render of an OBJ without a camera: exit code $rc: $(cat "$tmp/err")"
+# Numbers are strict for every option: NaN and infinity, a negative unsigned, octal-looking integers.
+expect_error 2 "--exposure.*'nan' is not a finite number" render "$scene" -o "$tmp/a.exr" --exposure nan
+expect_error 2 "--seed.*'-1' is not a whole number >= 0" render "$scene" -o "$tmp/a.exr" --seed -1
+expect_error 2 "--spp.*'010'" render "$scene" -o "$tmp/a.exr" --spp 010
+expect_error 2 "--time.*'nan'" train "$tmp" -o "$tmp/nan.npt" --time nan
+expect_error 2 "--fov.*'nan'" view "$tmp/bad.npt" -o "$tmp/a.png" --fov nan
+expect_error 2 "--distance.*inf" view "$tmp/bad.npt" -o "$tmp/a.png" --distance inf
+[[ ! -e "$tmp/nan.npt" ]] || fail "train --time nan wrote a model"
+# compare names both files when their sizes differ.
+run -q render "$scene" -o "$tmp/other.exr" --res 8x6 --spp 1 --threads 1
+expect_error 1 "small\.exr' is 16x12 but REFERENCE .*other\.exr' is 8x6" compare "$tmp/small.exr" "$tmp/other.exr"
+# No command writes over its own input, --force or not: a render whose PNG preview is the scene's texture.
+printf 'mtllib tex.mtl\nv -1 -1 0\nv 1 -1 0\nv 0 1 0\nvt 0 0\nusemtl t\nf 1/1 2/1 3/1\n' >"$tmp/tex.obj"
+printf 'newmtl t\nmap_Kd tex.png\n' >"$tmp/tex.mtl"
+cp "$here/../../docs/images/cornell_256spp.png" "$tmp/tex.png"
+expect_error 1 "--output '.*tex\.png': is the input texture" render "$tmp/tex.obj" -o "$tmp/tex.exr"
+cmp -s "$tmp/tex.png" "$here/../../docs/images/cornell_256spp.png" || fail "render replaced its own texture"
+[[ ! -e "$tmp/tex.exr" ]] || fail "render wrote tex.exr although tex.png is its input"
+mkdir -p "$tmp/ngp"
+printf 'x' >"$tmp/ngp/snap.msgpack"
+expect_error 1 "is the input SNAPSHOT" import-ngp "$tmp/ngp/snap.msgpack" -o "$tmp/ngp/./snap.msgpack"
+
 if [[ $failures -gt 0 ]]; then
     echo "$failures check(s) failed"
     exit 1

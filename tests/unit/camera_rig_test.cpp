@@ -49,7 +49,7 @@ TEST(CameraRig, BadInputNamesTheFileAndField) {
     test::expect_error_message([&] { summarize_rig(dir / "m.json"); },
                                {"m.json", "frames[0]", "transform_matrix"});
     nlohmann::json j = {{"w", 4}, {"h", 4}};
-    j["frames"] = {frame_at(1, 0, 0)};
+    j["frames"] = nlohmann::json::array({frame_at(1, 0, 0)});  // {x} alone is a copy of x for clang (CWG 2137)
     test::write_file(dir / "f.json", j.dump());
     test::expect_error_message([&] { summarize_rig(dir / "f.json"); }, {"f.json", "fl_x"});
     j["fl_x"] = -1;

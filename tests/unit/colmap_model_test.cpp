@@ -333,7 +333,9 @@ TEST(ColmapModel, EveryTruncationIsAnError) {
         {"images.bin", images_bin(ring.model.images)},
         {"points3D.bin", points_bin(ring.model.points)}};
     const fs::path dir = test::temp_dir();
-    for (const auto& [name, bytes] : files) {
+    for (const auto& file : files) {
+        const std::string& name = file.first;  // clang 14 cannot capture a structured binding
+        const std::string& bytes = file.second;
         // Every prefix, so that each field of each record is cut once.
         for (size_t n = 0; n < bytes.size(); ++n) {
             test::write_file(dir / name, bytes.substr(0, n));

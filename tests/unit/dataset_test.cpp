@@ -253,7 +253,7 @@ TEST(Dataset, BadInputs) {
     test::expect_error_message([&] { load_dataset(dir, "val"); }, {"transforms_val.json", "file not found"});
 
     test::write_file(dir / "bad" / "transforms.json", "{\"frames\": [");
-    test::expect_error_message(load(dir / "bad"), {"transforms.json", "malformed JSON"});
+    test::expect_error_message(load(dir / "bad"), {"transforms.json", "not valid JSON"});
 
     test::write_file(dir / "empty" / "transforms.json", "{\"fl_x\": 5, \"frames\": []}");
     test::expect_error_message(load(dir / "empty"), {"transforms.json", "'frames' is empty"});
@@ -275,9 +275,9 @@ TEST(Dataset, BadInputs) {
     write_one_frame(dir / "nan", "", "[[1,0,0,0],[0,null,0,0],[0,0,1,0],[0,0,0,1]]");
     test::expect_error_message(load(dir / "nan"), {"transforms.json", "frame 0", "NaN", "row 1, column 1"});
     write_one_frame(dir / "pynan", "", "[[1,0,0,0],[0,NaN,0,0],[0,0,1,0],[0,0,0,1]]");
-    test::expect_error_message(load(dir / "pynan"), {"transforms.json", "malformed JSON"});
+    test::expect_error_message(load(dir / "pynan"), {"transforms.json", "not valid JSON"});
     write_one_frame(dir / "inf", "", "[[1,0,0,0],[0,1,0,0],[0,0,1,1e999],[0,0,0,1]]");
-    test::expect_error_message(load(dir / "inf"), {"transforms.json", "malformed JSON", "1e999"});
+    test::expect_error_message(load(dir / "inf"), {"transforms.json", "not valid JSON", "1e999"});
 
     write_one_frame(dir / "nointr", "", k_identity, "");
     test::expect_error_message(
@@ -317,6 +317,42 @@ TEST(Dataset, BadInputs) {
     test::write_file(dir / "zero" / "a.png", zero_png);
     test::expect_error_message(load(dir / "zero"),
                                {"transforms.json", "frame 0", "a.png", "not a readable image"});
+}
+
+// Poses, scale and lens coefficients that would train, evaluate or render nonsense silently.
+TEST(Dataset, BadPosesScaleAndLens) {
+    const fs::path dir = test::temp_dir();
+    auto load = [](const fs::path& p) { return [p] { load_dataset(p, ""); }; };
+
+    write_one_frame(dir / "zero", "", "[[0,0,0,0],[0,0,0,0],[0,0,0,0],[0,0,0,0]]");
+    test::expect_error_message(load(dir / "zero"),
+                               {"transforms.json", "frame 0", "'transform_matrix'", "last row"});
+    write_one_frame(dir / "zero3", "", "[[0,0,0,1],[0,0,0,2],[0,0,0,3],[0,0,0,1]]");
+    test::expect_error_message(load(dir / "zero3"), {"transforms.json", "frame 0", "not invertible"});
+    write_one_frame(dir / "flat", "", "[[1,0,1,0],[0,1,0,0],[0,0,0,0],[0,0,0,1]]");  // z axis = x axis
+    test::expect_error_message(load(dir / "flat"), {"transforms.json", "frame 0", "not invertible"});
+    write_one_frame(dir / "far", "", "[[1,0,0,1e300],[0,1,0,0],[0,0,1,0],[0,0,0,1]]");
+    test::expect_error_message(load(dir / "far"),
+                               {"transforms.json", "frame 0", "beyond the range of a float"});
+
+    write_one_frame(dir / "scale0", "", k_identity, "\"fl_x\": 5, \"scale\": 0,");
+    test::expect_error_message(load(dir / "scale0"),
+                               {"transforms.json", "'scale' must be a positive number"});
+    write_one_frame(dir / "scaleneg", "", k_identity, "\"fl_x\": 5, \"scale\": -0.33,");
+    test::expect_error_message(load(dir / "scaleneg"), {"transforms.json", "'scale'"});
+    write_one_frame(dir / "aabb", "", k_identity, "\"fl_x\": 5, \"aabb_scale\": 1e9,");
+    test::expect_error_message(load(dir / "aabb"), {"transforms.json", "'aabb_scale' must be in (0, 128]"});
+    write_one_frame(dir / "fl", "", k_identity, "\"fl_x\": 1e300,");
+    test::expect_error_message(load(dir / "fl"), {"transforms.json", "frame 0", "do not fit a float"});
+
+    write_one_frame(dir / "k1", "", k_identity, "\"fl_x\": 5, \"k1\": 1e30,");
+    test::expect_error_message(load(dir / "k1"),
+                               {"transforms.json", "frame 0", "'k1'", "1e+30", "cannot be undistorted"});
+    write_one_frame(dir / "k1big", "\"k1\": 1e39, ", k_identity);
+    test::expect_error_message(load(dir / "k1big"), {"transforms.json", "frame 0", "must fit a float"});
+    // A strong but plausible lens (a wide phone camera) still loads.
+    write_one_frame(dir / "k1ok", "", k_identity, "\"fl_x\": 5, \"k1\": -0.3, \"k2\": 0.1, \"p1\": 0.001,");
+    EXPECT_NO_THROW(load_dataset(dir / "k1ok", ""));
 }
 
 TEST(Dataset, LegoTrainSplit) {

@@ -276,5 +276,45 @@ TEST_F(EvalViewCli, VideoGoesThroughFfmpegAndCleansUp) {
     EXPECT_FALSE(fs::exists(frames)) << "temporary frames left in " << frames;
 }
 
+// No command writes over one of its own inputs, --force or not (train -o DATA/transforms.json --force used to
+// replace the data set with a model; eval -o DATA/test writes NAME.png over the ground truth).
+TEST_F(EvalViewCli, NoCommandWritesOverItsInputs) {
+    const fs::path test_dir = dir() / "test";
+    std::vector<fs::path> inputs{test_json()};
+    for (const auto& e : fs::directory_iterator(test_dir))
+        if (e.path().extension() == ".png") inputs.push_back(e.path());
+    ASSERT_GT(inputs.size(), 1u);
+    std::vector<std::string> before;
+    for (const auto& p : inputs) before.push_back(slurp(p));
+    const fs::path log = dir() / "overwrite.log";
+    const std::string model = (dir() / "m.npt").string();
+
+    EXPECT_EQ(run_cli({"train", test_json().string(), "-o", test_json().string(), "--force", "-q"}, log), 1);
+    EXPECT_NE(slurp(log).find("is the input DATA"), std::string::npos) << slurp(log);
+    EXPECT_EQ(
+        run_cli({"train", test_dir.string(), "--split", "", "-o", inputs[1].string(), "--force", "-q"}, log),
+        1);
+    EXPECT_NE(slurp(log).find("is the input DATA's image of frame"), std::string::npos) << slurp(log);
+    EXPECT_EQ(run_cli({"eval", model, test_json().string(), "-o", test_dir.string(), "-q"}, log), 1);
+    EXPECT_NE(slurp(log).find("is the input DATA's image of frame 0"), std::string::npos) << slurp(log);
+    EXPECT_EQ(
+        run_cli({"view", model, "-o", inputs[1].string(), "--camera", test_json().string() + ":0", "-q"},
+                log),
+        1);
+    EXPECT_NE(slurp(log).find("is the input DATA's image"), std::string::npos) << slurp(log);
+    fs::copy_file(model, dir() / "model.vdb");  // a model file under a grid's name: bake it over itself
+    EXPECT_EQ(
+        run_cli({"bake", (dir() / "model.vdb").string(), "-o", (dir() / "model.vdb").string(), "-q"}, log),
+        1);
+    EXPECT_NE(slurp(log).find("is the input MODEL"), std::string::npos) << slurp(log);
+    for (size_t i = 0; i < inputs.size(); ++i) EXPECT_EQ(slurp(inputs[i]), before[i]) << inputs[i];
+    EXPECT_FALSE(fs::exists(test_dir / "metrics.json"));
+    // NaN is not a number of seconds: a usage error, no 0-step model.
+    EXPECT_EQ(
+        run_cli({"train", test_json().string(), "-o", (dir() / "nan.npt").string(), "--time", "nan"}, log),
+        2);
+    EXPECT_FALSE(fs::exists(dir() / "nan.npt"));
+}
+
 }  // namespace
 }  // namespace npt::nerf

@@ -2,14 +2,17 @@
 // must fail with one clear npt::Error naming the file and the field (never crash, hang or allocate absurd
 // amounts).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <stb_image_write.h>
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
 #include "core/image_io.h"
+#include "log_capture.h"
 #include "scene/scene.h"
 #include "test_support.h"
 
@@ -518,6 +521,151 @@ TEST(GltfLoaderBadInput, NodeCycle) {
     b.node({{"children", {1}}});
     b.node({{"children", {0}}}, false);
     expect_error(b.write(), {"scene.gltf", "cycle"});
+}
+
+// tinygltf keeps the default where a value has the wrong type; check_schema reports it with its JSON path.
+TEST(GltfLoaderBadInput, WrongTypesAreErrors) {
+    struct Case {
+        std::function<void(Builder&)> edit;
+        std::vector<std::string> parts;
+    };
+    const std::vector<Case> cases = {
+        {[](Builder& b) { b.j["meshes"][0]["primitives"] = 5; }, {"meshes[0].primitives", "got an integer"}},
+        {[](Builder& b) {
+             b.j["materials"] = json::array({{{"pbrMetallicRoughness", {{"baseColorFactor", "red"}}}}});
+         },
+         {"materials[0].pbrMetallicRoughness.baseColorFactor", "array of 4 numbers", "a string"}},
+        {[](Builder& b) { b.j["scene"] = "zero"; }, {"scene", "index into 'scenes'", "a string"}},
+        {[](Builder& b) { b.j["nodes"][0]["translation"] = "x"; }, {"nodes[0].translation", "array of 3"}},
+        {[](Builder& b) { b.j["meshes"][0]["primitives"][0]["material"] = -1; },
+         {"meshes[0].primitives[0].material", "integer >= 0", "-1"}},
+        {[](Builder& b) { b.j["meshes"][0]["primitives"][0]["material"] = 3; },
+         {"meshes[0].primitives[0].material", "3 does not exist", "'materials' has 0"}},
+        {[](Builder& b) { b.j["nodes"][0]["mesh"] = 1.5; }, {"nodes[0].mesh", "1.5"}},
+        {[](Builder& b) { b.j["accessors"][0]["type"] = "VEC9"; }, {"accessors[0].type", "'VEC9'"}},
+        {[](Builder& b) { b.j["nodes"][0]["name"] = json::array(); }, {"nodes[0].name", "a string"}},
+        {[](Builder& b) { b.j["meshes"][0]["primitives"] = json::array(); },
+         {"meshes[0].primitives", "empty"}},
+    };
+    for (const Case& c : cases) {
+        Builder b;
+        b.node({{"name", "n"}, {"mesh", b.triangle()}});
+        c.edit(b);
+        std::vector<std::string> parts{"scene.gltf"};
+        parts.insert(parts.end(), c.parts.begin(), c.parts.end());
+        try {
+            load_scene(b.write());
+            ADD_FAILURE() << "no error for " << c.parts[0];
+        } catch (const Error& e) {
+            for (const auto& part : parts)
+                EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
+                    << e.what() << " lacks " << part;
+        }
+    }
+}
+
+// Out of the spec's range: numbers with no sensible nearest value are errors (pbrt's rule), factors the spec
+// bounds to [0, 1] are clamped with one warning per field (Blender's).
+TEST(GltfLoaderBadInput, OutOfRangeValues) {
+    const auto material = [](json ext, json pbr = json::object()) {
+        Builder b;
+        b.j["materials"] =
+            json::array({{{"name", "mat"}, {"extensions", ext}, {"pbrMetallicRoughness", pbr}}});
+        b.node({{"mesh", b.triangle(0)}});
+        return b;
+    };
+    expect_error(material({{"KHR_materials_ior", {{"ior", -1}}}}).write(),
+                 {"scene.gltf", "materials[0].extensions.KHR_materials_ior.ior", "-1", ">= 1"});
+    expect_error(material({{"KHR_materials_emissive_strength", {{"emissiveStrength", -100}}}}).write(),
+                 {"scene.gltf", "emissiveStrength", "-100", ">= 0"});
+    {
+        Builder b;
+        b.j["cameras"] =
+            json::array({{{"type", "perspective"},
+                          {"perspective", {{"yfov", 0.5}, {"znear", 0.1}, {"aspectRatio", -2}}}}});
+        b.node({{"camera", 0}});
+        b.node({{"mesh", b.triangle()}});
+        expect_error(b.write(), {"scene.gltf", "cameras[0].perspective.aspectRatio", "-2", "> 0"});
+    }
+    {
+        Builder b;
+        b.node({{"mesh", b.triangle()}, {"rotation", {0, 0, 0, 0}}});
+        expect_error(b.write(), {"scene.gltf", "nodes[0].rotation", "zero"});
+    }
+    {
+        Builder b;
+        b.j["extensions"]["KHR_lights_punctual"]["lights"] =
+            json::array({{{"type", "point"}, {"intensity", -5}}});
+        b.node({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+        b.node({{"mesh", b.triangle()}});
+        expect_error(b.write(), {"scene.gltf", "KHR_lights_punctual.lights[0].intensity", "-5"});
+    }
+    test::LogCapture log;
+    Builder b = material({{"KHR_materials_transmission", {{"transmissionFactor", 5}}}},
+                         {{"roughnessFactor", -3}, {"metallicFactor", 0.5}});
+    b.j["materials"].push_back({{"name", "other"}, {"pbrMetallicRoughness", {{"roughnessFactor", 7}}}});
+    b.node({{"mesh", b.triangle(1)}});
+    const Scene s = load_scene(b.write());
+    ASSERT_EQ(s.materials.size(), 2u);
+    EXPECT_EQ(s.materials[0].transmission, 1.0f);
+    EXPECT_EQ(s.materials[0].roughness, 0.0f);
+    EXPECT_EQ(s.materials[0].metallic, 0.5f);
+    EXPECT_EQ(s.materials[1].roughness, 1.0f);
+    // roughnessFactor twice (two materials) and transmissionFactor once: one warning per field.
+    EXPECT_EQ(log.warnings(), 2) << log.text();
+    EXPECT_NE(log.text().find("roughnessFactor -3 is outside [0, 1], clamped to 0"), std::string::npos)
+        << log.text();
+}
+
+// The finiteness check runs on world-space data: finite local positions and a finite matrix can still
+// overflow a float (or leave the range Embree accepts) once multiplied.
+TEST(GltfLoaderBadInput, TransformsOverflowingWorldSpace) {
+    {
+        Builder b;
+        const int p = b.vec3({1, 0, 0, 2, 0, 0, 1, 1, 0});
+        const int mesh = b.mesh({{"POSITION", p}}, b.indices32({0, 1, 2}), -1, "tri");
+        // x' = 3e38 x + 3e38: finite in double, beyond a float.
+        b.node({{"name", "big"},
+                {"mesh", mesh},
+                {"matrix", {3e38, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 3e38, 0, 0, 1}}});
+        expect_error(b.write(), {"scene.gltf", "mesh 'tri'", "position 0", "not finite in world space"});
+    }
+    {
+        Builder b;
+        b.node({{"name", "far"}, {"mesh", b.triangle()}, {"scale", {1e30, 1e30, 1e30}}});
+        expect_error(b.write(), {"scene.gltf", "position 1", "beyond", "in world space"});
+    }
+    {
+        Builder b;
+        b.j["cameras"] =
+            json::array({{{"type", "perspective"}, {"perspective", {{"yfov", 0.5}, {"znear", 0.1}}}}});
+        b.node({{"name", "cam"}, {"camera", 0}, {"translation", {1e30, 0, 0}}});
+        b.node({{"mesh", b.triangle()}});
+        expect_error(b.write(), {"scene.gltf", "camera 'cam'", "position", "beyond"});
+    }
+}
+
+TEST(GltfLoaderBadInput, DeeplyNestedExtrasAreRefusedNotACrash) {
+    Builder b;
+    b.node({{"mesh", b.triangle()}});
+    std::string text = b.gltf();
+    const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+    text.insert(text.rfind('}'), ", \"extras\": " + deep);
+    const fs::path path = test::temp_dir() / "deep.gltf";
+    test::write_file(path, text);
+    expect_error(path, {"deep.gltf", "nested deeper than 256 levels"});
+}
+
+// A buffer URI naming a FIFO (or /dev/stdin) would block tinygltf's reader forever: regular files only.
+TEST(GltfLoaderBadInput, FifoBufferIsRefusedNotWaitedFor) {
+    Builder b;
+    b.node({{"mesh", b.triangle()}});
+    json d = b.j;
+    d["buffers"] = {{{"byteLength", b.bin.size()}, {"uri", "pipe.bin"}}};
+    const fs::path path = test::temp_dir() / "scene.gltf";
+    ASSERT_EQ(::mkfifo((path.parent_path() / "pipe.bin").c_str(), 0600), 0);
+    test::write_file(path, d.dump());
+    expect_error(path, {"scene.gltf", "pipe.bin"});
 }
 
 }  // namespace

@@ -131,12 +131,12 @@ TEST(JsonScene, UnknownKeysAreWarnings) {
 TEST(JsonSceneBadInput, WrongTypesAndMissingFiles) {
     const fs::path dir = make_assets();
     struct Case {
-        const char* text;
+        std::string text;
         std::vector<std::string> parts;
     };
     const Case cases[] = {
         {"", {"empty"}},
-        {"{\"include\": [", {"malformed JSON"}},
+        {"{\"include\": [", {"not valid JSON"}},
         {"[1, 2]", {"expected an object"}},
         {R"({"include": "tri.obj"})", {"include", "expected an array"}},
         {R"({"include": ["gone.obj"]})", {"include[0]", "gone.obj", "not found"}},
@@ -152,6 +152,16 @@ TEST(JsonSceneBadInput, WrongTypesAndMissingFiles) {
         {R"({"background": [0, 0]})", {"background"}},
         {R"({"render": {"width": -5}})", {"render.width"}},
         {R"({"render": {"spp": 1.5}})", {"render.spp"}},
+        {R"({"background": [0, -1, 0]})", {"background", "must not be negative"}},
+        {R"({"background": [0, 1e300, 0]})", {"background", "range of a float"}},
+        {R"({"camera": {"position": [0, 1, 4], "look_at": [0, 1, 0], "aspect": -2}})", {"camera.aspect"}},
+        {R"({"camera": {"position": [1e30, 1, 4], "look_at": [0, 1, 0]}})", {"camera", "position", "beyond"}},
+        {R"({"include": [{"file": "tri.obj", "scale": [1e30, 1e30, 1e30]}]})",
+         {"tri.obj", "beyond", "world space"}},
+        {R"({"volumes": [{"file": "x.bin", "scale": [1e30, 1, 1]}]})",
+         {"volumes[0]", "cube corner", "beyond"}},
+        {R"({"a": )" + std::string(1000, '[') + "]}", {"nested deeper"}},
+        {R"({"render": {"seed": 1e400}})", {"not valid JSON", "1e400", "line 1"}},
     };
     for (size_t i = 0; i < std::size(cases); ++i) {
         const fs::path p = dir / ("bad" + std::to_string(i) + ".json");

@@ -106,7 +106,7 @@ TEST(NerfConfig, MalformedJson) {
     for (const char* text : {"{\"encoding\": {\"levels\": 4,}\n}", "", "{\"a\": 1e999}"}) {
         test::write_file(dir / "config.json", text);
         test::expect_error_message([&] { load_config((dir / "config.json").string()); },
-                                   {"config.json", "malformed JSON"});
+                                   {"config.json", *text ? "not valid JSON" : "file is empty"});
     }
 }
 

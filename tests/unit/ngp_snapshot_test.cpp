@@ -618,6 +618,17 @@ TEST(NgpSnapshot, BadFiles) {
                         {"bad.msgpack", "not a MessagePack snapshot"});
 }
 
+// nlohmann's MessagePack reader recurses once per level: 200 000 nested arrays overflowed the stack.
+TEST(NgpSnapshot, DeeplyNestedIsAnErrorNotACrash) {
+    std::vector<uint8_t> deep(3 + 200000 + 1, 0x91);  // {"a": [[[...[nil]...]]]}
+    deep[0] = 0x81;
+    deep[1] = 0xa1;
+    deep[2] = 'a';
+    deep.back() = 0xc0;
+    expect_import_error(deep, {"bad.msgpack", "nested deeper than 256 levels"});
+    expect_import_error(gzip(deep), {"bad.msgpack", "nested deeper"});
+}
+
 TEST(NgpSnapshot, MissingKeys) {
     for (const char* key : {"snapshot", "encoding", "network", "rgb_network", "dir_encoding"}) {
         Mp f = good_file();

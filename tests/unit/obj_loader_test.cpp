@@ -1,6 +1,7 @@
 // OBJ + MTL loader: geometry, grouping by material, the documented MTL mapping, uv flip, volume placeholders,
 // and bad input (missing file, missing MTL -> default material with a warning, NaN, bad indices).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 
@@ -120,6 +121,70 @@ TEST(ObjLoaderBadInput, MissingEmptyAndBroken) {
     test::write_file(dir / "tex.obj", "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl t\nf 1 2 3\n");
     test::write_file(dir / "t.mtl", "newmtl t\nmap_Kd missing.png\n");
     expect_error(dir / "tex.obj", {"tex.obj", "material 't'", "map_Kd", "missing.png"});
+}
+
+// tinyobjloader turns numbers it cannot parse into 0 and reads indices with atoi, unchecked; our strict pass
+// (scene/obj_syntax.h) reports each with its line.
+TEST(ObjLoaderBadInput, NonFiniteNumbersAndBadIndices) {
+    const fs::path dir = test::temp_dir();
+    const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    const struct {
+        const char* name;
+        std::string text;
+        std::vector<std::string> parts;
+    } cases[] = {
+        {"nan", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "v:", "'nan' is not a finite number"}},
+        {"inf", "v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "'inf'"}},
+        {"overflow", "v 0 0 0\nv 1e400 0 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "'1e400'"}},
+        {"comma", "v 0 0 0\nv 1,5 0 0\nv 0 1 0\nf 1 2 3\n", {"line 2", "'1,5'"}},
+        {"short", "v 0 0\n", {"line 1", "expected 3 to 7 numbers, got 2"}},
+        {"vn", tri + "vn 0 0 nan\nf 1//1 2//1 3//1\n", {"line 4", "vn:"}},
+        {"uv_range",
+         tri + "vt 0 0\nf 1/1 2/1 3/9\n",
+         {"line 5", "f:", "index 9 is out of range", "1 texture coordinates"}},
+        {"uv_relative", tri + "vt 0 0\nf 1/-1 2/-1 3/-2\n", {"line 5", "relative index -2"}},
+        {"normal_range", tri + "f 1//1 2//1 3//1\n", {"line 4", "0 normals"}},
+        {"vertex_range", tri + "f 1 2 4\n", {"line 4", "index 4 is out of range (the file has 3 vertices)"}},
+        {"zero", tri + "f 0 1 2\n", {"line 4", "index 0"}},
+        {"beyond64", tri + "f 1 2 99999999999999999999999\n", {"line 4", "beyond 64 bits"}},
+        {"beyond32", tri + "f 1 2 4294967299\n", {"line 4", "beyond 32 bits"}},
+        {"notint", tri + "f 1 2 3.5\n", {"line 4", "'3.5' is not an integer index"}},
+        {"parts", tri + "f 1/1/1/1 2 3\n", {"line 4", "more than three parts"}},
+        {"mtl", "mtllib bad.mtl\n" + tri + "usemtl x\nf 1 2 3\n", {"bad.mtl", "line 2", "Kd:", "'nan'"}},
+    };
+    test::write_file(dir / "bad.mtl", "newmtl x\nKd 1 nan 0\n");
+    for (const auto& c : cases) {
+        const fs::path path = dir / (std::string(c.name) + ".obj");
+        test::write_file(path, c.text);
+        try {
+            load_scene(path);
+            ADD_FAILURE() << "no error for " << c.name;
+        } catch (const Error& e) {
+            for (const auto& part : c.parts)
+                EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
+                    << e.what() << " lacks " << part;
+        }
+    }
+    // Valid forms still load: relative indices, v/vt/vn, a w coordinate, vertex colours, comments.
+    test::write_file(dir / "ok.obj",
+                     "v 0 0 0 1\nv 1 0 0 0.5 0.5 0.5\nv +0 1 0 # top\nvt 0 0\nvn 0 0 1\n"
+                     "f -3/1/1 -2/1/1 -1/1/1\n");
+    const Scene s = load_scene(dir / "ok.obj");
+    EXPECT_EQ(s.triangle_count(), 1u);
+}
+
+// A FIFO (or /dev/stdin) named as an MTL file or a texture would block the loader forever: regular files only.
+TEST(ObjLoaderBadInput, FifosAreRefusedNotWaitedFor) {
+    const fs::path dir = test::temp_dir();
+    ASSERT_EQ(::mkfifo((dir / "pipe.mtl").c_str(), 0600), 0);
+    ASSERT_EQ(::mkfifo((dir / "pipe.png").c_str(), 0600), 0);
+    test::write_file(dir / "a.obj", "mtllib pipe.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl x\nf 1 2 3\n");
+    EXPECT_EQ(load_scene(dir / "a.obj").triangle_count(), 1u);  // a warning, the default material
+    test::write_file(dir / "t.mtl", "newmtl t\nmap_Kd pipe.png\n");
+    test::write_file(dir / "b.obj", "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl t\nf 1 2 3\n");
+    expect_error(dir / "b.obj", {"b.obj", "map_Kd", "pipe.png", "not a regular file"});
+    ASSERT_EQ(::mkfifo((dir / "c.obj").c_str(), 0600), 0);
+    expect_error(dir / "c.obj", {"c.obj", "not a regular file"});
 }
 
 }  // namespace

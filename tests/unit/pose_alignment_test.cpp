@@ -331,7 +331,8 @@ TEST(PoseAlignment, BadTransformsJsonNamesFileAndField) {
         test::expect_error_message([&] { read_transforms_poses(f); }, parts);
     };
     const std::string id = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
-    expect("", {"not valid JSON"});
+    expect("", {"file is empty"});
+    expect("{", {"not valid JSON"});
     expect("[1, 2]", {"'frames'"});
     expect(R"({"frames": {}})", {"'frames'", "not an array"});
     expect(R"({"frames": []})", {"'frames' is empty"});

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <mutex>
 
+#include "core/memory.h"
 #include "render/camera.h"
 #include "render/cpu/embree_scene.h"
 #include "render/path_integrator.h"
@@ -29,7 +30,9 @@ Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const 
     PathSettings ps;
     ps.max_depth = options.max_depth;
 
-    Image image(width, height, 3);
+    Image image = with_memory_context(
+        "--res " + std::to_string(width) + "x" + std::to_string(height) + ": the image",
+        double(width) * double(height) * 3.0 * 4.0, "lower --res", [&] { return Image(width, height, 3); });
     const uint64_t total = uint64_t(width) * uint64_t(height) * uint64_t(spp);
     std::atomic<uint64_t> done{0};
     std::atomic<uint64_t> dropped{0};

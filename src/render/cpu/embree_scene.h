@@ -5,6 +5,8 @@
 
 #include <embree3/rtcore.h>
 
+#include <cassert>
+
 #include "render/surface.h"
 #include "scene/scene.h"
 
@@ -24,11 +26,25 @@ class EmbreeScene {
     RTCScene m_scene = nullptr;
 };
 
+// What Embree accepts (its RayK::valid(), asserted inside rtcIntersect1/rtcOccluded1 even in Debian's release
+// build): finite origin and direction with no component beyond FLT_LARGE = 1.844e18, and tmax not NaN.
+// Loaders keep the world within scene::k_max_world_coordinate, so a ray failing this is a bug upstream.
+inline bool embree_accepts(const Ray& ray, float tmax) {
+    constexpr float k_flt_large = 1.844e18f;
+    const auto ok = [](Vec3 v) {
+        return fabsf(v.x) <= k_flt_large && fabsf(v.y) <= k_flt_large && fabsf(v.z) <= k_flt_large;
+    };
+    return ok(ray.o) && ok(ray.d) && !(tmax != tmax);  // the comparisons are false for NaN
+}
+
 class EmbreeTracer {
   public:
     explicit EmbreeTracer(const EmbreeScene& scene) : m_scene(scene.handle()) {}
 
+    // A ray Embree would reject is a miss (debug builds assert): a NaN or runaway ray never reaches Embree.
     bool intersect(const Ray& ray, float tmax, Hit* hit) const {
+        assert(embree_accepts(ray, tmax) && "non-finite or huge ray");
+        if (!embree_accepts(ray, tmax)) return false;
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
         RTCRayHit rh;
@@ -56,7 +72,10 @@ class EmbreeTracer {
         return true;
     }
 
+    // A ray Embree would reject counts as blocked, so it adds no light (debug builds assert).
     bool occluded(const Ray& ray, float tmax) const {
+        assert(embree_accepts(ray, tmax) && "non-finite or huge ray");
+        if (!embree_accepts(ray, tmax)) return true;
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
         RTCRay r;

@@ -1,0 +1,22 @@
+# NERFPT_SANITIZE: AddressSanitizer + UndefinedBehaviorSanitizer on every C++ file we compile (the library,
+# the CLI, the tests), any UB report fatal. NERFPT_FUZZ adds libFuzzer's coverage instrumentation (clang only);
+# fuzz/CMakeLists.txt links the harnesses with -fsanitize=fuzzer. Third-party libraries stay uninstrumented:
+# ASan still catches their heap errors through its allocator.
+if(NERFPT_FUZZ)
+    if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+        message(FATAL_ERROR "NERFPT_FUZZ needs clang (libFuzzer): configure with -DCMAKE_CXX_COMPILER=clang++")
+    endif()
+    set(NERFPT_SANITIZE ON CACHE BOOL "" FORCE)
+endif()
+if(NERFPT_SANITIZE)
+    set(_nerfpt_san -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
+    if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+        # Third-party headers' own UB (TBB's tagged pointers): not ours to fix; see the file.
+        list(APPEND _nerfpt_san -fsanitize-ignorelist=${PROJECT_SOURCE_DIR}/cmake/sanitizer_ignorelist.txt)
+    endif()
+    if(NERFPT_FUZZ)
+        list(APPEND _nerfpt_san -fsanitize=fuzzer-no-link)
+    endif()
+    add_compile_options("$<$<COMPILE_LANGUAGE:CXX>:${_nerfpt_san}>")
+    add_link_options(-fsanitize=address,undefined)
+endif()
