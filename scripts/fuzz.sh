@@ -96,8 +96,11 @@ for t in "${targets[@]}"; do
     echo "fuzz: $t for ${seconds}s"
     # Memory: our largest documented allocation from a small file is a 2^28-voxel dense grid (4 GiB); more is a
     # finding.
-    if ! (cd "$build/fuzz" && "./fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=6144 -malloc_limit_mb=5120 -timeout=25 \
-        -max_len=1048576 -print_final_stats=1 "corpus/$t" "seeds/$t" 2>"fuzz_$t.log"); then
+    # Absolute paths: a harness moves into its scratch folder on its first file-based input (fuzz/harness_support),
+    # after which libFuzzer could no longer read relative corpus paths (it ran two image seeds and stopped).
+    if ! (cd "$build/fuzz" && dir=$PWD && "./fuzz_$t" -max_total_time="$seconds" -rss_limit_mb=6144 -malloc_limit_mb=5120 \
+        -timeout=25 -max_len=1048576 -print_final_stats=1 -artifact_prefix="$dir/" "$dir/corpus/$t" "$dir/seeds/$t" \
+        2>"fuzz_$t.log"); then
         echo "fuzz: $t FOUND A PROBLEM: see $build/fuzz/fuzz_$t.log and $build/fuzz/crash-*" >&2
         tail -n 40 "$build/fuzz/fuzz_$t.log" >&2
         status=1
