@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -127,8 +128,13 @@ TEST(OptixRender, NerfDemoMatchesTheCpuDirectAndBaked) {
               0)
         << test::read_text(dir / "bake.log");
 
+    // The direct scene in both forms: the wavefront one (the NeRF pass, fp16 MLP: the default) and, with
+    // NERFPT_OPTIX_WAVEFRONT=0, every sample evaluated by its own thread (fp32).
     for (const char* name : {"scene.gltf", "scene_baked.gltf"})
         expect_same_as_cpu(scene::load_scene(dir / name), 320, 320, 32, 7, name);
+    setenv("NERFPT_OPTIX_WAVEFRONT", "0", 1);
+    expect_same_as_cpu(scene::load_scene(dir / "scene.gltf"), 320, 320, 32, 7, "scene.gltf per thread");
+    unsetenv("NERFPT_OPTIX_WAVEFRONT");
 }
 
 // The denoiser: at 4 spp its image must be closer to the 4512-spp Cycles reference than the noisy render. Some

@@ -19,6 +19,7 @@
 #include "render/gpu/optix_denoiser.h"
 #include "render/gpu/optix_launch.h"
 #include "render/gpu/optix_pipeline.h"
+#include "render/gpu/optix_wavefront.h"
 #include "render/scene_data.h"
 
 namespace npt::gpu {
@@ -45,11 +46,31 @@ static bool use_grid_textures() {
     return !(v && std::string(v) == "0");
 }
 
+// Scenes with NeRF models are traced in the wavefront form (wavefront.h: the network evaluated in batches on
+// tensor cores) unless NERFPT_OPTIX_WAVEFRONT=0, a benchmark knob: every sample evaluated by its own thread.
+static bool use_wavefront() {
+    const char* v = std::getenv("NERFPT_OPTIX_WAVEFRONT");
+    return !(v && std::string(v) == "0");
+}
+
+// Sample slots for an image of `pixels`: enough threads per launch to fill the GPU, at most spp.
+static uint32_t slots_for(size_t pixels, uint32_t spp) {
+    return uint32_t(std::clamp<size_t>((k_threads_per_launch + pixels - 1) / pixels, 1,
+                                       std::min<size_t>(k_max_slots, spp)));
+}
+
 struct OptixRenderer::State {
     State(const scene::Scene& scene, int w, int h)
         : width(w), height(h), data(scene, w, h), dev(data.view(), use_grid_textures()),
           accel(ctx.get(), dev, stream.s),
-          programs(ctx.get(), accel.input_meshes()) {}
+          programs(ctx.get(), accel.input_meshes()) {
+        if (use_wavefront() && data.view().volumes.size > 0) {
+            const size_t pixels = size_t(w) * size_t(h);
+            wavefront = std::make_unique<WavefrontLoop>(data.view().volumes, dev.view().volumes,
+                                                        pixels * slots_for(pixels, k_max_slots), stream.s);
+            if (!wavefront->useful()) wavefront.reset();
+        }
+    }
     int width, height;
     render::SceneData data;
     DeviceScene dev;
@@ -57,6 +78,7 @@ struct OptixRenderer::State {
     StreamOwner stream;
     OptixAccel accel;
     OptixPrograms programs;
+    std::unique_ptr<WavefrontLoop> wavefront;  // null: the per-thread form
 };
 
 OptixRenderer::OptixRenderer(const scene::Scene& scene, int width, int height) {
@@ -81,8 +103,7 @@ Image OptixRenderer::render(const render::RenderOptions& options, const render::
     const size_t pixels = size_t(width) * size_t(height);
     // Sample slots: a launch of width x height x slots threads, slot z tracing samples z, z + slots, ... of its
     // pixel into its own plane of sums; the planes are added in a fixed order, so a seed gives one image.
-    const uint32_t slots = uint32_t(std::clamp<size_t>((k_threads_per_launch + pixels - 1) / pixels, 1,
-                                                       std::min<size_t>(k_max_slots, spp)));
+    const uint32_t slots = slots_for(pixels, spp);
     DeviceBuffer<float4> accum(pixels * slots, "the image", "--res");
     accum.zero_async(stream);
     DeviceBuffer<unsigned long long> dropped(1);
@@ -109,6 +130,22 @@ Image OptixRenderer::render(const render::RenderOptions& options, const render::
 
     const uint64_t total = uint64_t(pixels) * spp;
     uint32_t done = 0, batch = slots;  // the first launch: one sample per slot
+    if (m->wavefront) {
+        if (denoised) {
+            // The guides only: the per-thread program with no samples writes them (sample_begin 0, slot 0).
+            p.sample_begin = p.sample_count = 0;
+            cuda_check(cudaMemcpyAsync(params.data(), &p, sizeof p, cudaMemcpyHostToDevice, stream), "cudaMemcpyAsync");
+            optix_check(optixLaunch(m->programs.pipeline(), stream, CUdeviceptr(params.data()), sizeof(LaunchParams),
+                                    &m->programs.sbt(), unsigned(width), unsigned(height), 1),
+                        "optixLaunch");
+        }
+        for (; done < spp; done += batch) {
+            batch = std::min(slots, spp - done);
+            p.sample_begin = done;
+            m->wavefront->run_wave(p, batch, m->programs, params.data());
+            if (progress) progress(uint64_t(pixels) * (done + batch), total);
+        }
+    }
     while (done < spp) {
         p.sample_begin = done;
         p.sample_count = std::min(batch, spp - done);
