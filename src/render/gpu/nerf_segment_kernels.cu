@@ -36,18 +36,21 @@ __global__ void __launch_bounds__(k_block) gather_kernel(WavefrontPath* paths, c
         slot[1] = p.query[1].slot;
     }
     warp_append(go_on, id, next, next_count);
-    for (uint32_t l = 0; l < lists.lists; ++l)  // the same trip count in every lane: warp_append needs them all
-        warp_append(slot[l & 1u] == (l >> 1), id, lists.items + size_t(l) * lists.capacity, lists.counts + l);
+    // The same trip counts in every lane: warp_append needs them all.
+    for (uint32_t l = 0; l < lists.lists; ++l)
+        for (uint32_t kind = 0; kind < 2; ++kind)
+            warp_append(slot[kind] == l, segment_item(id, int(kind)), lists.items + size_t(l) * lists.capacity,
+                        lists.counts + l);
 }
 
 __global__ void __launch_bounds__(k_block) start_kernel(NerfSegmentModel m, WavefrontPath* paths,
-                                                         const uint32_t* list, uint32_t n, int kind,
-                                                         SegmentState* states, Vec3* dirs, uint32_t* live,
-                                                         uint32_t* live_count) {
+                                                         const uint32_t* list, uint32_t n, SegmentState* states,
+                                                         Vec3* dirs, uint32_t* live, uint32_t* live_count) {
     const uint32_t j = blockIdx.x * blockDim.x + threadIdx.x;
     bool marching = false;
     if (j < n) {
-        WavefrontPath& p = paths[list[j]];
+        const int kind = segment_kind(list[j]);
+        WavefrontPath& p = paths[segment_path(list[j])];
         const NerfQuery q = p.query[kind];
         nerf::MarchParams mp = m.march;
         mp.t_max = q.t_max;
@@ -95,7 +98,7 @@ __global__ void __launch_bounds__(k_block) march_kernel(NerfSegmentModel m, Segm
 }
 
 __global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, WavefrontPath* paths,
-                                                             const uint32_t* list, int kind, SegmentState* states,
+                                                             const uint32_t* list, SegmentState* states,
                                                              const uint32_t* live, uint32_t n,
                                                              SegmentSamples samples, const float* sigma,
                                                              const Rgb* rgb, uint32_t* next, uint32_t* next_count) {
@@ -104,6 +107,7 @@ __global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, 
     uint32_t j = 0;
     if (a < n) {
         j = live[a];
+        const int kind = segment_kind(list[j]);
         SegmentState& s = states[j];
         // media::march_nerf's compositing, sample by sample (volume_integrator.h).
         media::Accumulator acc;
@@ -121,7 +125,7 @@ __global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, 
             acc.add(sigma[base + q] * m.density_scale, c, samples.dt[base + q]);
         }
         if (acc.done() || s.cursor.done(m.march)) {
-            write_result(paths[list[j]], kind, acc.radiance, acc.done() ? 0.0f : expf(acc.log_t));
+            write_result(paths[segment_path(list[j])], kind, acc.radiance, acc.done() ? 0.0f : expf(acc.log_t));
         } else {
             s.radiance = acc.radiance;
             s.log_t = acc.log_t;
@@ -140,10 +144,10 @@ void segment_gather(WavefrontPath* paths, const uint32_t* active, uint32_t n, ui
     NPT_CUDA_CHECK_LAUNCH("segment gather_kernel");
 }
 
-void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, uint32_t n, int kind,
+void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, uint32_t n,
                    SegmentState* states, Vec3* dirs, uint32_t* live, uint32_t* live_count, cudaStream_t s) {
     if (n == 0) return;
-    start_kernel<<<blocks_for(n), k_block, 0, s>>>(m, paths, list, n, kind, states, dirs, live, live_count);
+    start_kernel<<<blocks_for(n), k_block, 0, s>>>(m, paths, list, n, states, dirs, live, live_count);
     NPT_CUDA_CHECK_LAUNCH("segment start_kernel");
 }
 
@@ -154,11 +158,11 @@ void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32
     NPT_CUDA_CHECK_LAUNCH("segment march_kernel");
 }
 
-void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, int kind,
-                       SegmentState* states, const uint32_t* live, uint32_t n, const SegmentSamples& samples,
-                       const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s) {
+void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,
+                       const uint32_t* live, uint32_t n, const SegmentSamples& samples, const float* sigma,
+                       const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s) {
     if (n == 0) return;
-    composite_kernel<<<blocks_for(n), k_block, 0, s>>>(m, paths, list, kind, states, live, n, samples, sigma, rgb,
+    composite_kernel<<<blocks_for(n), k_block, 0, s>>>(m, paths, list, states, live, n, samples, sigma, rgb,
                                                        next, next_count);
     NPT_CUDA_CHECK_LAUNCH("segment composite_kernel");
 }

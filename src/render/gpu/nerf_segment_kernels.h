@@ -7,6 +7,7 @@
 
 #include <cstdint>
 
+#include "core/platform.h"
 #include "render/gpu/nerf_segments.h"
 
 namespace npt::gpu {
@@ -29,8 +30,14 @@ struct SegmentSamples {          // the samples of a round, packed (each live se
     float4* scratch = nullptr;   // k per live segment: the march's own slots before packing
 };
 
-// Lists of path indices: list l (= 2 * model slot + kind, kind 0: volume ray, 1: shadow ray) is
-// items[l * capacity ...], with its length in counts[l] (zero before).
+// A segment in a list: its path's index and which of the path's queries it is (kind 0: the volume ray, with
+// emission; 1: the shadow ray, attenuation only) in the top bit.
+NPT_HD NPT_INLINE uint32_t segment_item(uint32_t path, int kind) { return path | (uint32_t(kind) << 31); }
+NPT_HD NPT_INLINE uint32_t segment_path(uint32_t item) { return item & 0x7fffffffu; }
+NPT_HD NPT_INLINE int segment_kind(uint32_t item) { return int(item >> 31); }
+
+// Lists of segments, one per model slot: list l is items[l * capacity ...], its length in counts[l] (zero
+// before). A wave's paths number below 2^31.
 struct SegmentLists {
     uint32_t* items = nullptr;
     uint32_t* counts = nullptr;
@@ -41,16 +48,16 @@ struct SegmentLists {
 // The paths of `active` (null: 0 .. n-1) that are not done go to `next`; their queued segments to the lists.
 void segment_gather(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next, uint32_t* next_count,
                     const SegmentLists& lists, cudaStream_t s);
-// Starts the march of each of the n segments of `list` (its paths' query[kind]); a segment with nothing to march
-// is written back at once (no emission, T = 1), the others go to `live`.
-void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, uint32_t n, int kind,
+// Starts the march of each of the n segments of `list`; a segment with nothing to march is written back at once
+// (no emission, T = 1), the others go to `live`.
+void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, uint32_t n,
                    SegmentState* states, Vec3* dirs, uint32_t* live, uint32_t* live_count, cudaStream_t s);
 // Up to k samples for each of the n live segments.
 void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
                    const SegmentSamples& samples, cudaStream_t s);
 // Composites the round's samples; finished segments are written into their paths, the others appended to next.
-void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, int kind,
-                       SegmentState* states, const uint32_t* live, uint32_t n, const SegmentSamples& samples,
-                       const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s);
+void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,
+                       const uint32_t* live, uint32_t n, const SegmentSamples& samples, const float* sigma,
+                       const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s);
 
 }  // namespace npt::gpu

@@ -12,14 +12,25 @@
 namespace npt::gpu {
 
 namespace {
-// The rounds of the view renderer (cuda_renderer.cpp): samples per live segment in the first round, doubling.
-constexpr int k_first_round = 8;
-constexpr int k_max_round = 64;
-constexpr size_t k_max_samples = size_t(1) << 22;  // samples evaluated per round at most
+// Rounds as in the view renderer (cuda_renderer.cpp), samples per live segment doubling from round to round,
+// but the first round takes about k_round_samples samples in all: a long list starts with 8 per segment (few
+// evaluated past the point where a segment turns opaque), a short one (later bounces) with up to 128, so it
+// ends in a round or two instead of a handful of nearly empty ones, each with a synchronisation.
+constexpr int k_min_first_round = 8;
+constexpr int k_max_round = 128;  // SegmentSamples::used is 8 bits
+constexpr uint32_t k_round_samples = 1u << 22;
+// The sample buffers: 8 per path of a wave, between 4 and 16 million (about 120 bytes each).
+constexpr size_t k_min_samples = size_t(1) << 22, k_max_samples = size_t(1) << 24;
+
+int first_round(uint32_t segments) {
+    int k = k_min_first_round;
+    while (k < k_max_round && uint64_t(k) * segments < k_round_samples) k *= 2;
+    return k;
+}
 }  // namespace
 
 struct NerfSegmentPass::Buffers {
-    size_t paths = 0, samples = 0;
+    size_t paths = 0, segments = 0, samples = 0;
     DeviceBuffer<uint32_t> lists, counts;  // counts: [0] next paths, [1] live a, [2] live b, [3] samples, lists...
     DeviceBuffer<SegmentState> states;
     DeviceBuffer<Vec3> dirs;
@@ -78,22 +89,24 @@ NerfSegmentPass::NerfSegmentPass(Span<const media::VolumeView> host, Span<const 
 
     Buffers& b = *m_buf;
     b.paths = std::max<size_t>(max_paths, 1);
-    b.samples = std::max(k_max_samples, (b.paths + 127) / 128 * 128);  // one sample per segment at least
-    const size_t lists = 2 * m_models.size();
+    b.segments = 2 * b.paths;  // a volume and a shadow segment per path at most
+    // At least one sample per segment, so that every live segment takes part in every round.
+    b.samples = std::max((b.segments + 127) / 128 * 128, std::clamp(8 * b.paths, k_min_samples, k_max_samples));
+    const size_t lists = m_models.size();
     const char* lower = "--res or --spp";
-    b.lists.allocate(std::max<size_t>(lists, 1) * b.paths, "the NeRF segment lists", lower);
+    b.lists.allocate(std::max<size_t>(lists, 1) * b.segments, "the NeRF segment lists", lower);
     b.counts.allocate(4 + lists);
     b.host_counts.resize(4 + lists);
-    b.states.allocate(b.paths, "the NeRF segments", lower);
-    b.dirs.allocate(b.paths, "the NeRF segments", lower);
-    b.live[0].allocate(b.paths, "the NeRF segments", lower);
-    b.live[1].allocate(b.paths, "the NeRF segments", lower);
+    b.states.allocate(b.segments, "the NeRF segments", lower);
+    b.dirs.allocate(b.segments, "the NeRF segments", lower);
+    b.live[0].allocate(b.segments, "the NeRF segments", lower);
+    b.live[1].allocate(b.segments, "the NeRF segments", lower);
+    b.first.allocate(b.segments, "the NeRF segments", lower);
+    b.used.allocate(b.segments, "the NeRF segments", lower);
     b.pos.allocate(b.samples, "the NeRF samples", lower);
     b.dt.allocate(b.samples, "the NeRF samples", lower);
     b.sigma.allocate(b.samples, "the NeRF samples", lower);
     b.owner.allocate(b.samples, "the NeRF samples", lower);
-    b.first.allocate(b.samples, "the NeRF samples", lower);
-    b.used.allocate(b.samples, "the NeRF samples", lower);
     b.scratch.allocate(b.samples, "the NeRF samples", lower);
     b.rgb.allocate(b.samples, "the NeRF samples", lower);
     b.encoded.allocate(b.samples * nerf::cuda::k_mlp_inputs, "the NeRF samples", lower);
@@ -111,9 +124,9 @@ uint32_t NerfSegmentPass::read(const uint32_t* device_count) {
 
 uint32_t NerfSegmentPass::run(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next) {
     Buffers& b = *m_buf;
-    const uint32_t lists = uint32_t(2 * m_models.size());
+    const uint32_t lists = uint32_t(m_models.size());
     cuda_check(cudaMemsetAsync(b.counts.data(), 0, b.counts.bytes(), m_stream), "cudaMemsetAsync");
-    SegmentLists l{b.lists.data(), b.counts.data() + 4, uint32_t(b.paths), lists};
+    SegmentLists l{b.lists.data(), b.counts.data() + 4, uint32_t(b.segments), lists};
     segment_gather(paths, active, n, next, b.counts.data(), l, m_stream);
     cuda_check(cudaMemcpyAsync(b.host_counts.data(), b.counts.data(), b.counts.bytes(), cudaMemcpyDeviceToHost,
                                m_stream),
@@ -121,32 +134,31 @@ uint32_t NerfSegmentPass::run(WavefrontPath* paths, const uint32_t* active, uint
     cuda_check(cudaStreamSynchronize(m_stream), "the NeRF pass");
     const std::vector<uint32_t> counts = b.host_counts;
     for (uint32_t i = 0; i < lists; ++i)
-        if (counts[4 + i] > 0) evaluate(paths, i / 2, int(i % 2), counts[4 + i]);
+        if (counts[4 + i] > 0) evaluate(paths, i, counts[4 + i]);
     return counts[0];
 }
 
 std::string NerfSegmentPass::stats() {
-    std::string s = std::to_string(m_segments[0]) + " volume and " + std::to_string(m_segments[1]) +
-                    " shadow segments in " + std::to_string(m_rounds) + " rounds";
-    m_segments[0] = m_segments[1] = m_rounds = 0;
+    std::string s = std::to_string(m_segments) + " segments in " + std::to_string(m_rounds) + " rounds";
+    m_segments = m_rounds = 0;
     return s;
 }
 
-void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, int kind, uint32_t n) {
+void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
     Buffers& b = *m_buf;
-    m_segments[kind] += n;
+    m_segments += n;
     const NerfSegmentModel& m = m_models[model];
-    const uint32_t* list = b.lists.data() + (2 * model + size_t(kind)) * b.paths;
+    const uint32_t* list = b.lists.data() + model * b.segments;
     uint32_t* live_count = b.counts.data() + 1;
     uint32_t* sample_count = b.counts.data() + 3;
     cuda_check(cudaMemsetAsync(live_count, 0, 2 * sizeof(uint32_t), m_stream), "cudaMemsetAsync");
-    segment_start(m, paths, list, n, kind, b.states.data(), b.dirs.data(), b.live[0].data(), live_count, m_stream);
+    segment_start(m, paths, list, n, b.states.data(), b.dirs.data(), b.live[0].data(), live_count, m_stream);
     uint32_t live = read(live_count);
     SegmentSamples samples{b.pos.data(), b.dt.data(), b.owner.data(), b.first.data(), b.used.data(), sample_count,
                            b.scratch.data()};
     const uint32_t capacity = uint32_t(b.samples);
     int cur = 0;
-    for (int k = k_first_round; live > 0; k = std::min(2 * k, k_max_round)) {
+    for (int k = first_round(live); live > 0; k = std::min(2 * k, k_max_round)) {
         ++m_rounds;
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / live)));
         cuda_check(cudaMemsetAsync(sample_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
@@ -166,11 +178,13 @@ void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, int kind, uin
         a.capacity = capacity;
         a.sigma = b.sigma.data();
         a.rgb = b.rgb.data();
-        nerf::cuda::mlp_inference(a, kind == 1, m_stream);
+        // With colour for every sample: the shadow segments' colour is not needed, but evaluating both kinds in
+        // the same rounds halves the rounds (and their synchronisations).
+        nerf::cuda::mlp_inference(a, false, m_stream);
         const int nxt = 1 - cur;
         uint32_t* next_count = b.counts.data() + 1 + nxt;
         cuda_check(cudaMemsetAsync(next_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
-        segment_composite(m, paths, list, kind, b.states.data(), b.live[cur].data(), live, samples, b.sigma.data(),
+        segment_composite(m, paths, list, b.states.data(), b.live[cur].data(), live, samples, b.sigma.data(),
                           b.rgb.data(), b.live[nxt].data(), next_count, m_stream);
         live = read(next_count);
         cur = nxt;

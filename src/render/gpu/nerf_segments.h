@@ -1,9 +1,9 @@
 // The NeRF pass of the wavefront path tracer (wavefront.h): after each OptiX launch it gathers the paths that
 // go on and the NeRF segments they left queued, marches every segment through its model's occupancy grid a few
 // samples per round (the rounds of `nerfpt view`'s GPU renderer), evaluates the samples with the hash-grid
-// kernel and the fused tensor-core MLP (fp16; density only for shadow rays) and composites them exactly as
+// kernel and the fused tensor-core MLP (fp16) and composites them exactly as
 // media::march_nerf does (the same samples, lattice offset, scales and stopping point), writing each result back
-// into its path. Host code; the kernels are in nerf_segments.cu.
+// into its path. Host code; the kernels are in nerf_segment_kernels.cu.
 #pragma once
 
 #include <cuda_fp16.h>
@@ -50,12 +50,12 @@ class NerfSegmentPass {
     // (returned: how many), and every queued segment is evaluated into its path.
     uint32_t run(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next);
 
-    // Since the last call: segments evaluated (volume rays, shadow rays) and rounds; then the counts restart.
+    // Since the last call: segments evaluated and rounds; then the counts restart.
     std::string stats();
 
   private:
     struct Buffers;
-    void evaluate(WavefrontPath* paths, size_t model, int kind, uint32_t n);
+    void evaluate(WavefrontPath* paths, size_t model, uint32_t n);
     uint32_t read(const uint32_t* device_count);
 
     cudaStream_t m_stream;
@@ -64,7 +64,7 @@ class NerfSegmentPass {
     std::vector<DeviceBuffer<uint32_t>> m_bits;
     DeviceBuffer<uint32_t> m_slot_of_volume;
     std::unique_ptr<Buffers> m_buf;
-    uint64_t m_segments[2] = {0, 0}, m_rounds = 0;
+    uint64_t m_segments = 0, m_rounds = 0;
 };
 
 }  // namespace npt::gpu

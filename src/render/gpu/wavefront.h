@@ -56,8 +56,18 @@ struct WavefrontParams {
     WavefrontPath* paths = nullptr;
     const uint32_t* active = nullptr;  // the paths of this launch; null in the first launch of a wave
     const uint32_t* nerf_slot = nullptr;  // per scene volume
-    uint32_t wave_paths = 0;              // paths of the wave: pixels x slots of this wave
+    // The wave's pixels: several waves run side by side (optix_wavefront.h), wave k of n taking every n-th run
+    // of k_wave_stripe pixels from the k-th, so that each has its share of every part of the image. `stripes`:
+    // the runs of this wave (a path of a new wave is pixel-in-wave + stripes * k_wave_stripe * slot).
+    uint32_t wave_index = 0, wave_count = 1, stripes = 0;
 };
+
+constexpr uint32_t k_wave_stripe = 32;  // a warp's pixels
+
+// The pixel of a wave's local index (WavefrontParams), past the image's last pixel for a last stripe's tail.
+NPT_HD NPT_INLINE uint32_t wave_pixel(const WavefrontParams& w, uint32_t local) {
+    return ((local / k_wave_stripe) * w.wave_count + w.wave_index) * k_wave_stripe + local % k_wave_stripe;
+}
 
 // The volumes of `volumes` on [t_begin, t_end] of `ray`: when exactly one volume lies there and it is a NeRF the
 // pass evaluates, the segment is left in *q for the pass (true); otherwise it is integrated here into *vol

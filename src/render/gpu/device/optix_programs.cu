@@ -129,11 +129,16 @@ extern "C" __global__ void __raygen__wavefront() {
     const gpu::WavefrontParams& w = params.wave;
     const OptixTracer tracer;
     if (!w.active) {
-        // A new wave: path i is sample sample_begin + i / pixels of pixel i % pixels.
-        const uint32_t pixels = uint32_t(params.width) * uint32_t(params.height);
+        // A new wave: path i is sample sample_begin + i / locals of the wave's pixel i % locals.
+        const uint32_t locals = w.stripes * gpu::k_wave_stripe;
         gpu::WavefrontPath p;
-        p.pixel = i % pixels;
-        p.slot = i / pixels;
+        p.pixel = gpu::wave_pixel(w, i % locals);
+        p.slot = i / locals;
+        if (p.pixel >= uint32_t(params.width) * uint32_t(params.height)) {  // past the last pixel: no path
+            p.phase = gpu::PathPhase::Done;
+            w.paths[i] = p;
+            return;
+        }
         const uint32_t x = p.pixel % uint32_t(params.width), y = p.pixel / uint32_t(params.width);
         SobolSampler sampler(params.seed, x, y, params.sample_begin + p.slot);
         p.ray = render::generate_camera_ray(params.scene.camera, int(x), int(y), sampler.next_2d());
