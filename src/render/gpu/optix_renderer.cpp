@@ -56,8 +56,10 @@ static bool use_wavefront() {
     return !(v && std::string(v) == "0");
 }
 
-// Waves of the wavefront form run side by side, each on its part of the image (optix_wavefront.h).
-constexpr int k_waves_in_flight = 2;
+// Waves of the wavefront form that run side by side, each on its share of the image (optix_wavefront.h). One:
+// two were measured no faster on h200 (the NeRF demo at 1080p 39.7 against 41.5 frames/s, NeRF only at 800x800
+// 180 against 205: the GPU is busy, not waiting on the pass's synchronisations; docs/benchmarks.md).
+constexpr int k_waves_in_flight = 1;
 
 // Sample slots for an image of `pixels`: enough threads per launch to fill the GPU, at most spp.
 static uint32_t slots_for(size_t pixels, uint32_t spp) {
