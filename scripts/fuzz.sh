@@ -24,7 +24,10 @@ build=${NERFPT_SAN_BUILD:-build-san}
 if [[ ! -f "$build/build.ninja" ]]; then scripts/configure_sanitize.sh >/dev/null; fi
 cmake --build "$build" -j "${NERFPT_JOBS:-$(nproc)}" --target fuzzers nerfpt_unit_tests
 
-export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=1}
+# A single allocation over 5 GiB fails with std::bad_alloc, as on a machine with that much memory
+# (cmake/sanitizer_new.cpp): a loader must turn it into a one-line error. OpenVDB allocates whatever a size
+# field in the file says before reading it, so a flipped bit there asks for 18 GB or 2^60 bytes.
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=1:max_allocation_size_mb=5120}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/cmake/lsan_suppressions.txt}
 

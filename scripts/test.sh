@@ -20,8 +20,9 @@ if [[ "${1:-}" == "--sanitize" ]]; then
     fi
     start=$(date +%s)
     scripts/configure_sanitize.sh
-    # Leaks are reported too; a UB report stops the test that made it (-fno-sanitize-recover).
-    export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
+    # Leaks are reported too; a UB report stops the test that made it (-fno-sanitize-recover). A failed
+    # allocation is a std::bad_alloc, as in a normal build (cmake/sanitizer_new.cpp).
+    export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:allocator_may_return_null=1}
     export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
     export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/cmake/lsan_suppressions.txt}
     if [[ $quick -eq 1 ]]; then
