@@ -4,11 +4,14 @@
 # tests; render_bench on the Cornell scenes; a lego model trained for 60 s and baked at 256^3 for the
 # model-in-scene demo (frames/s at 1920x1080, 1 spp), a NeRF-only view beside `nerfpt view`, the direct-vs-baked
 # error at equal time; then Nsight Compute on one launch of each. Logs in $OUT. Usage: gpu_optix_cycle.sh [--no-ncu]
+# (GTEST_FILTER='*' runs every GPU test, not only the OptiX and shared-maths ones).
 set -uo pipefail
+# NERFPT_OPTIX_WAVEFRONT=0 / NERFPT_WAVEFRONT_STATS=1: the NeRF demo without and with the wavefront form's
+# breakdown (render/gpu/optix_wavefront.cpp).
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_out}
 mkdir -p "$out"
-timeout 400 scripts/gpu_check.sh run --gtest_filter='OptixRender.*:SharedMathGpu.*' >"$out/optix_tests.log" 2>&1
+timeout 400 scripts/gpu_check.sh run --gtest_filter="${GTEST_FILTER:-OptixRender.*:SharedMathGpu.*}" >"$out/optix_tests.log" 2>&1
 grep -E "OptiX|relMSE|seed|PASSED|FAILED|SKIPPED|Failure|error" "$out/optix_tests.log" | head -40
 export LD_LIBRARY_PATH=/tmp/nerfpt-gpu/lib NERFPT_SHARED_DATA=$PWD/.gpu
 bin=/tmp/nerfpt-gpu/bin
@@ -22,8 +25,17 @@ timeout 120 $bin/nerfpt train .gpu/nerf_synthetic/lego -o $demo/lego.npt --backe
 timeout 60 $bin/nerfpt bake $demo/lego.npt -o $demo/lego_256.vdb --res 256 --backend cuda -q
 ls -la $demo | tee "$out/demo_files.log"
 bench --res 1920x1080 --spp 1 --repeats 3 --frames 20 --scene-file $demo/scene.gltf --scene-file $demo/scene_baked.gltf
+# The NeRF queried per thread (the wavefront form off), and where the wavefront form's time goes.
+echo "== per thread (NERFPT_OPTIX_WAVEFRONT=0)" | tee -a "$out/render_bench.log"
+NERFPT_OPTIX_WAVEFRONT=0 bench --res 1920x1080 --spp 1 --repeats 2 --frames 3 --scene-file $demo/scene.gltf
+NERFPT_WAVEFRONT_STATS=1 timeout 60 $bin/render_bench --backend optix --res 1920x1080 --spp 1 --repeats 1 --frames 3 \
+    --scene-file $demo/scene.gltf 2>&1 | grep -E "wavefront|frames" | tee "$out/wavefront_stats.log"
 # NeRF only (a volume cube, grey background) through the path tracer, and nerfpt view of the same model.
 bench --res 800x800 --spp 1 --repeats 3 --frames 50 --scene-file $demo/scene.json
+NERFPT_WAVEFRONT_STATS=1 timeout 60 $bin/render_bench --backend optix --res 800x800 --spp 1 --repeats 1 --frames 3 \
+    --scene-file $demo/scene.json 2>&1 | grep -E "wavefront|frames" | tee -a "$out/wavefront_stats.log"
+echo "== per thread (NERFPT_OPTIX_WAVEFRONT=0)" | tee -a "$out/render_bench.log"
+NERFPT_OPTIX_WAVEFRONT=0 bench --res 800x800 --spp 1 --repeats 2 --frames 10 --scene-file $demo/scene.json
 timeout 60 $bin/view_bench $demo/lego.npt --res 800 2>&1 | tail -5 | tee "$out/view_bench.log" ||
     timeout 60 $bin/view_bench --help 2>&1 | head -5
 
@@ -56,3 +68,7 @@ prof() {
 prof cornell --res 1920x1080 --scene cornell
 prof cornell_volume --res 1920x1080 --scene cornell_volume
 prof demo --res 1920x1080 --scene-file $demo/scene.gltf
+# The wavefront form's kernels over one frame (launches and the NeRF pass's rounds), one line each.
+timeout 200 ncu --section SpeedOfLight --section LaunchStats -c 60 $bin/render_bench --backend optix --repeats 1 \
+    --spp 1 --frames 1 --res 1920x1080 --scene-file $demo/scene.gltf >"$out/ncu_wavefront.log" 2>&1
+grep -E "^  [a-zA-Z_].*\(|Duration|Registers Per" "$out/ncu_wavefront.log" | head -120 >"$out/ncu_wavefront_summary.log"

@@ -15,6 +15,7 @@ packages=(
     libopenvdb-dev libnanovdb-dev libboost-dev  # OpenVDB 10 headers include Boost; Debian does not depend on it
     python3
     ffmpeg colmap  # nerfpt curate / poses / capture drive these command-line tools (and their end-to-end test)
+    blender python3-numpy  # the Blender add-on (blender/nerfpt_blender) and its tests (ctest -L blender)
     clang libclang-rt-14-dev  # the ASan + UBSan build and the libFuzzer harnesses (scripts/test.sh, scripts/fuzz.sh)
 )
 

@@ -146,8 +146,13 @@ std::vector<InputFile> scene_inputs(const scene::Scene& scene) {
 
 int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
     if (args.backend == "optix") render::choose_render_backend(args.backend, nullptr);  // fails before loading
-    if (args.denoise && args.backend != "optix")
-        throw Error("--denoise: the denoiser is OptiX's; add --backend optix");
+    if (args.denoise) {  // before loading: the denoiser needs the OptiX backend, chosen or by default
+        if (args.backend == "cpu") throw Error("--denoise: the denoiser is OptiX's; it does not run with --backend cpu");
+        std::string why;
+        if (render::choose_render_backend(args.backend, &why) != "optix")
+            throw Error("--denoise: the denoiser is OptiX's, and OptiX cannot be used here (" +
+                        (why.empty() ? std::string("this nerfpt was built without the OptiX backend") : why) + ")");
+    }
     const fs::path out_exr = args.output;
     fs::path out_png = out_exr;
     out_png.replace_extension(".png");

@@ -105,6 +105,7 @@ constexpr uint32_t k_sobol_dimensions = 7;
 
 class SobolSampler {
   public:
+    SobolSampler() = default;  // a placeholder in device arrays of path states (render/gpu/wavefront.h)
     NPT_HD SobolSampler(uint64_t seed, uint32_t px, uint32_t py, uint32_t sample_index)
         : m_pixel_seed(uint32_t(mix64(seed ^ mix64((uint64_t(py) << 32) | px)))),
           m_index(sample_index),
@@ -128,8 +129,8 @@ class SobolSampler {
     // 24 bits so that the result is < 1 in float.
     NPT_HD static float to_unit(uint32_t v) { return float(v >> 8) * 0x1p-24f; }
 
-    uint32_t m_pixel_seed;
-    uint32_t m_index;
+    uint32_t m_pixel_seed = 0;
+    uint32_t m_index = 0;
     uint32_t m_dimension = 0;
     Pcg32 m_rng;
 };

@@ -29,6 +29,10 @@ struct GridView {
     const float* density = nullptr;  // nx * ny * nz, x fastest, then y, then z; >= 0 and finite
     const Vec3* color = nullptr;     // same layout; linear RGB
     Affine3 local_to_index;
+    // Device copies only (render/gpu/device_scene.h): a CUDA texture object of float4 (density, colour) with
+    // hardware trilinear filtering and a zero border, the same field from one fetch instead of eight voxel
+    // reads (weights in 8-bit fixed point: within 1/256 of a voxel-to-voxel difference). 0: none.
+    unsigned long long texture = 0;
 
     NPT_HD NPT_INLINE bool valid() const { return nx > 0 && ny > 0 && nz > 0 && density && color; }
     NPT_HD NPT_INLINE size_t index(int i, int j, int k) const {
@@ -55,6 +59,12 @@ NPT_HD NPT_INLINE FieldSample sample_trilinear(const GridView& g, Vec3 x) {
     if (!(fx >= -1.0f && fy >= -1.0f && fz >= -1.0f && fx < float(g.nx) && fy < float(g.ny) &&
           fz < float(g.nz)))
         return s;
+#if defined(__CUDA_ARCH__)
+    if (g.texture) {  // texel (i, j, k) is centred at i + 0.5 in unnormalised coordinates
+        const float4 v = tex3D<float4>(cudaTextureObject_t(g.texture), x.x + 0.5f, x.y + 0.5f, x.z + 0.5f);
+        return {v.x, Vec3(v.y, v.z, v.w)};
+    }
+#endif
     int i0 = int(fx), j0 = int(fy), k0 = int(fz);
     float tx = x.x - fx, ty = x.y - fy, tz = x.z - fz;
     for (int c = 0; c < 8; ++c) {

@@ -39,116 +39,158 @@ NPT_HD NPT_INLINE bool geometry_agrees(const SurfaceInteraction& si, Vec3 wo, Ve
     return (go * gi > 0.0f) == (so * s_i > 0.0f);
 }
 
+// What a path carries from one vertex to the next.
+struct PathState {
+    Rgb radiance{0.0f}, throughput{1.0f};
+    Vec3 prev_p{0.0f};          // the last scattering point (MIS of emitters found by the BSDF sample)
+    float prev_bsdf_pdf = 0.0f;
+    int depth = 0;              // scattering events so far
+    bool specular_bounce = true;  // the camera ray counts as specular: no MIS on what it sees
+};
+
+// A light sample that no surface blocks: it adds `contribution` times the volumes' transmittance along `ray`
+// up to `tmax` (marched with lattice offset `xi`). The CPU resolves it at once; the GPU's wavefront renderer
+// may batch the transmittance of many paths first (render/gpu).
+struct ShadowRequest {
+    Ray ray;
+    float tmax = 0.0f;
+    float xi = 0.0f;
+    Rgb contribution{0.0f};
+    bool pending = false;
+};
+
+// The volumes' emission and attenuation on the segment in front of the next surface. False: the path is
+// opaque from here on and ends.
+NPT_HD NPT_INLINE bool path_add_volume(PathState& st, const media::VolumeResult& vol) {
+    st.radiance += st.throughput * vol.radiance;
+    st.throughput *= vol.transmittance;
+    return vol.transmittance != 0.0f;
+}
+
+// Everything a path does at the end of `ray` after the volumes in front of it: the environment when nothing
+// was hit, emission, next-event estimation (one light sample, weighted against the BSDF strategy; an unblocked
+// one becomes *shadow), the BSDF sample and Russian roulette. True: the path goes on along *next.
+template <class Tracer, class Sampler>
+NPT_HD bool path_scatter(const SceneView& sv, const Tracer& tracer, PathState& st, const Ray& ray, bool found,
+                         const Hit& hit, Sampler& sampler, const PathSettings& ps, ShadowRequest* shadow,
+                         Ray* next) {
+    shadow->pending = false;
+    if (!found) {
+        const lights::LightSetView& ls = sv.lights;
+        if (ls.environment_light >= 0) {
+            Rgb le = lights::environment_radiance(ls.environment, ray.d);
+            float w = 1.0f;
+            if (!st.specular_bounce && ps.strategy == LightStrategy::LightOnly)
+                w = 0.0f;
+            else if (!st.specular_bounce && ps.strategy == LightStrategy::Mis)
+                w = power_heuristic(st.prev_bsdf_pdf, lights::environment_light_pdf(ls, ray.d));
+            st.radiance += st.throughput * le * w;
+        }
+        return false;
+    }
+
+    SurfaceInteraction si = make_surface_interaction(sv, hit, ray);
+    Vec3 wo_world = -ray.d;
+    if (!is_black(si.emission)) {
+        float w = 1.0f;
+        if (!st.specular_bounce && ps.strategy == LightStrategy::LightOnly) {
+            // An emitter that could not have been light-sampled (zero pdf) is only found this way.
+            w = lights::triangle_light_pdf(sv.lights, hit.mesh, hit.prim, st.prev_p, si.p) > 0.0f ? 0.0f : 1.0f;
+        } else if (!st.specular_bounce && ps.strategy == LightStrategy::Mis) {
+            float light_pdf = lights::triangle_light_pdf(sv.lights, hit.mesh, hit.prim, st.prev_p, si.p);
+            w = power_heuristic(st.prev_bsdf_pdf, light_pdf);
+        }
+        st.radiance += st.throughput * si.emission * w;
+    }
+    if (st.depth >= ps.max_depth) return false;
+
+    const materials::Bsdf& bsdf = si.bsdf;
+    Vec3 wo = si.shading.to_local(wo_world);
+
+    // Next-event estimation: one light sample, weighted against the BSDF strategy.
+    if (!materials::bsdf_is_delta(bsdf) && ps.strategy != LightStrategy::BsdfOnly) {
+        lights::LightSample ls;
+        float u_select = sampler.next_1d();
+        Vec2 u_light = sampler.next_2d();
+        if (lights::sample_light(sv.lights, si.p, u_select, u_light, &ls) && ls.pdf > 0.0f &&
+            !is_black(ls.radiance)) {
+            Vec3 wi = si.shading.to_local(ls.wi);
+            Rgb f = materials::bsdf_eval(bsdf, wo, wi) * fabsf(wi.z);
+            if (!is_black(f) && geometry_agrees(si, wo_world, ls.wi)) {
+                Ray sray = spawn_ray(si, ls.wi);
+                float tmax = isinf(ls.distance) ? INFINITY : ls.distance * (1.0f - 1e-4f);
+                // Shadow rays see the volumes' transmittance (no emission: the volume does not scatter).
+                if (!tracer.occluded(sray, tmax)) {
+                    float w = ls.is_delta || ps.strategy == LightStrategy::LightOnly
+                                  ? 1.0f
+                                  : power_heuristic(ls.pdf, materials::bsdf_pdf(bsdf, wo, wi));
+                    shadow->ray = sray;
+                    shadow->tmax = tmax;
+                    shadow->xi = sv.volumes.size > 0 ? sampler.next_1d() : 0.0f;
+                    shadow->contribution = st.throughput * f * ls.radiance * (w / ls.pdf);
+                    shadow->pending = true;
+                }
+            }
+        }
+    }
+
+    // Continue the path by sampling the BSDF.
+    materials::BsdfSample bs;
+    float u_lobe = sampler.next_1d();
+    Vec2 u_dir = sampler.next_2d();
+    if (!materials::bsdf_sample(bsdf, wo, u_lobe, u_dir, &bs) || bs.pdf <= 0.0f) return false;
+    Vec3 wi_world = si.shading.to_world(bs.wi);
+    if (!geometry_agrees(si, wo_world, wi_world)) return false;
+    st.throughput *= bs.f * (fabsf(bs.wi.z) / bs.pdf);
+    if (is_black(st.throughput) || !is_finite(st.throughput)) return false;
+    st.specular_bounce = bs.is_delta;
+    st.prev_bsdf_pdf = bs.pdf;
+    st.prev_p = si.p;
+    *next = spawn_ray(si, wi_world);
+
+    if (st.depth + 1 >= ps.rr_start_depth) {
+        // Roulette only once the throughput has fallen below 1/8: killing brighter paths costs more
+        // variance than the time it saves (bench/render_bench on cornell, efficiency 1 / (relMSE x
+        // seconds): 379 with survival = max(throughput) as in pbrt, 629 with 4x, 715 with 8x, 685 with
+        // 16x, 558 with no roulette).
+        float survive = fminf(1.0f, 8.0f * max_component(st.throughput));
+        if (sampler.next_1d() >= survive) return false;
+        st.throughput *= 1.0f / survive;
+    }
+    ++st.depth;
+    return true;
+}
+
 // Radiance arriving at the ray origin along `ray`. `sampler` gives this pixel-sample's random numbers, one
 // dimension per decision in a fixed order (so low-discrepancy samplers stratify each decision).
 template <class Tracer, class Sampler>
 NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sampler& sampler,
                       const PathSettings& ps) {
-    Rgb radiance(0.0f), throughput(1.0f);
-    bool specular_bounce = true;  // the camera ray counts as specular: no MIS on what it sees
-    float prev_bsdf_pdf = 0.0f;
-    Vec3 prev_p = ray.o;
-
-    for (int depth = 0;; ++depth) {
+    PathState st;
+    st.prev_p = ray.o;
+    for (;;) {
         Hit hit;
         bool found = tracer.intersect(ray, INFINITY, &hit);
-
         // The volume ray: emission and attenuation of the volumes on [0, nearest surface), so a surface
         // inside or behind a volume occludes exactly the part of it that lies behind the surface.
-        if (sv.volumes.size > 0) {
-            media::VolumeResult vol = media::integrate_volumes(
-                sv.volumes, ray, 0.0f, found ? hit.t : INFINITY, sampler.next_1d(), false);
-            radiance += throughput * vol.radiance;
-            throughput *= vol.transmittance;
-            if (vol.transmittance == 0.0f) break;
-        }
-
-        if (!found) {
-            const lights::LightSetView& ls = sv.lights;
-            if (ls.environment_light >= 0) {
-                Rgb le = lights::environment_radiance(ls.environment, ray.d);
-                float w = 1.0f;
-                if (!specular_bounce && ps.strategy == LightStrategy::LightOnly)
-                    w = 0.0f;
-                else if (!specular_bounce && ps.strategy == LightStrategy::Mis)
-                    w = power_heuristic(prev_bsdf_pdf, lights::environment_light_pdf(ls, ray.d));
-                radiance += throughput * le * w;
-            }
+        if (sv.volumes.size > 0 &&
+            !path_add_volume(st, media::integrate_volumes(sv.volumes, ray, 0.0f, found ? hit.t : INFINITY,
+                                                          sampler.next_1d(), false)))
             break;
+        ShadowRequest shadow;
+        Ray next;
+        const bool more = path_scatter(sv, tracer, st, ray, found, hit, sampler, ps, &shadow, &next);
+        if (shadow.pending) {
+            const float t = sv.volumes.size > 0 ? media::integrate_volumes(sv.volumes, shadow.ray, 0.0f, shadow.tmax,
+                                                                           shadow.xi, true)
+                                                      .transmittance
+                                                : 1.0f;
+            st.radiance += shadow.contribution * t;
         }
-
-        SurfaceInteraction si = make_surface_interaction(sv, hit, ray);
-        Vec3 wo_world = -ray.d;
-        if (!is_black(si.emission)) {
-            float w = 1.0f;
-            if (!specular_bounce && ps.strategy == LightStrategy::LightOnly) {
-                // An emitter that could not have been light-sampled (zero pdf) is only found this way.
-                w = lights::triangle_light_pdf(sv.lights, hit.mesh, hit.prim, prev_p, si.p) > 0.0f ? 0.0f
-                                                                                                   : 1.0f;
-            } else if (!specular_bounce && ps.strategy == LightStrategy::Mis) {
-                float light_pdf = lights::triangle_light_pdf(sv.lights, hit.mesh, hit.prim, prev_p, si.p);
-                w = power_heuristic(prev_bsdf_pdf, light_pdf);
-            }
-            radiance += throughput * si.emission * w;
-        }
-        if (depth >= ps.max_depth) break;
-
-        const materials::Bsdf& bsdf = si.bsdf;
-        Vec3 wo = si.shading.to_local(wo_world);
-
-        // Next-event estimation: one light sample, weighted against the BSDF strategy.
-        if (!materials::bsdf_is_delta(bsdf) && ps.strategy != LightStrategy::BsdfOnly) {
-            lights::LightSample ls;
-            float u_select = sampler.next_1d();
-            Vec2 u_light = sampler.next_2d();
-            if (lights::sample_light(sv.lights, si.p, u_select, u_light, &ls) && ls.pdf > 0.0f &&
-                !is_black(ls.radiance)) {
-                Vec3 wi = si.shading.to_local(ls.wi);
-                Rgb f = materials::bsdf_eval(bsdf, wo, wi) * fabsf(wi.z);
-                if (!is_black(f) && geometry_agrees(si, wo_world, ls.wi)) {
-                    Ray shadow = spawn_ray(si, ls.wi);
-                    float tmax = isinf(ls.distance) ? INFINITY : ls.distance * (1.0f - 1e-4f);
-                    // Shadow rays see the volumes' transmittance (no emission: the volume does not scatter).
-                    float shadow_t = tracer.occluded(shadow, tmax) ? 0.0f : 1.0f;
-                    if (shadow_t > 0.0f && sv.volumes.size > 0)
-                        shadow_t =
-                            media::integrate_volumes(sv.volumes, shadow, 0.0f, tmax, sampler.next_1d(), true)
-                                .transmittance;
-                    if (shadow_t > 0.0f) {
-                        float w = ls.is_delta || ps.strategy == LightStrategy::LightOnly
-                                      ? 1.0f
-                                      : power_heuristic(ls.pdf, materials::bsdf_pdf(bsdf, wo, wi));
-                        radiance += throughput * f * ls.radiance * (shadow_t * w / ls.pdf);
-                    }
-                }
-            }
-        }
-
-        // Continue the path by sampling the BSDF.
-        materials::BsdfSample bs;
-        float u_lobe = sampler.next_1d();
-        Vec2 u_dir = sampler.next_2d();
-        if (!materials::bsdf_sample(bsdf, wo, u_lobe, u_dir, &bs) || bs.pdf <= 0.0f) break;
-        Vec3 wi_world = si.shading.to_world(bs.wi);
-        if (!geometry_agrees(si, wo_world, wi_world)) break;
-        throughput *= bs.f * (fabsf(bs.wi.z) / bs.pdf);
-        if (is_black(throughput) || !is_finite(throughput)) break;
-        specular_bounce = bs.is_delta;
-        prev_bsdf_pdf = bs.pdf;
-        prev_p = si.p;
-        ray = spawn_ray(si, wi_world);
-
-        if (depth + 1 >= ps.rr_start_depth) {
-            // Roulette only once the throughput has fallen below 1/8: killing brighter paths costs more
-            // variance than the time it saves (bench/render_bench on cornell, efficiency 1 / (relMSE x
-            // seconds): 379 with survival = max(throughput) as in pbrt, 629 with 4x, 715 with 8x, 685 with
-            // 16x, 558 with no roulette).
-            float survive = fminf(1.0f, 8.0f * max_component(throughput));
-            if (sampler.next_1d() >= survive) break;
-            throughput *= 1.0f / survive;
-        }
+        if (!more) break;
+        ray = next;
     }
-    return radiance;
+    return st.radiance;
 }
 
 }  // namespace npt::render

@@ -85,6 +85,7 @@ expect_error 1 "missing\.gltf" render "$tmp/missing.gltf" -o "$tmp/a.exr"
 expect_error 1 "missing\.gltf" info "$tmp/missing.gltf"
 expect_error 2 "unknown backend 'gpu'" render "$scene" -o "$tmp/a.exr" --backend gpu
 expect_error 1 "--denoise: the denoiser is OptiX's" render "$scene" -o "$tmp/a.exr" --denoise
+expect_error 1 "--denoise: the denoiser is OptiX's; it does not run with --backend cpu" render "$scene" -o "$tmp/a.exr" --denoise --backend cpu
 # Without a usable OptiX backend (CI: not built, or no GPU) asking for it is an error, never a silent fallback.
 if [[ -z "${NERFPT_CLI_HAS_GPU:-}" ]]; then
     expect_error 1 "--backend optix: " render "$scene" -o "$tmp/a.exr" --backend optix

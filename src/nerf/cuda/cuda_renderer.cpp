@@ -11,6 +11,7 @@
 #include "nerf/cuda/cuda_device.h"
 #include "nerf/cuda/fused_mlp.h"
 #include "nerf/cuda/hash_grid_kernels.h"
+#include "nerf/cuda/occupancy_bits.h"
 #include "nerf/cuda/occupancy_kernels.h"
 #include "nerf/cuda/render_kernels.h"
 
@@ -173,45 +174,12 @@ CudaViewRenderer::CudaViewRenderer(const NerfModel& model, Precision precision)
         cuda_check(cudaMemset(I.mlp_half.data(), 0, I.mlp_half.bytes()), "cudaMemset");
         to_half(I.params.data(), uint32_t(k_mlp_param_count), I.mlp_half.data(), I.stream);
     }
-    // The marches read the occupancy as a bit field (OccupancyGridView::occupied_bits).
-    const OccupancyGridView g = model.occupancy.view();
-    std::vector<uint32_t> bits((model.occupancy.cell_count() + 31) / 32, 0u);
-    for (size_t i = 0; i < model.occupancy.cell_count(); ++i)
-        if (g.occupied[i]) bits[i >> 5] |= 1u << (i & 31);
-    I.occupied.upload(bits, "the occupancy grid", "occupancy.resolution");
-    const int res = model.occupancy.resolution();
-    // The box around the occupied cells: rays are marched inside it only (march_clip).
-    {
-        Vec3 lo(1e30f), hi(-1e30f);
-        const size_t cells = size_t(res) * res * res;
-        for (size_t i = 0; i < model.occupancy.cell_count(); ++i) {
-            if (!g.occupied[i]) continue;
-            const int c = int(i / cells);
-            const size_t local = i % cells;
-            const float size = float(1 << c), base = 0.5f - 0.5f * size, w = size / float(res);
-            const size_t xyz[3] = {local % res, (local / res) % res, local / (size_t(res) * res)};
-            for (int a = 0; a < 3; ++a) {
-                lo[a] = std::min(lo[a], base + float(xyz[a]) * w);
-                hi[a] = std::max(hi[a], base + float(xyz[a] + 1) * w);
-            }
-        }
-        I.box_min = lo;
-        I.box_max = hi;
-    }
-    if (coarse_cells_fit(res)) {
-        // Coarse cells for skipping empty space (OccupancyGridView::coarse_bits).
-        const int k = OccupancyGridView::k_coarse, rc = res / k;
-        std::vector<uint32_t> coarse(coarse_words(model.occupancy.cascades(), res), 0u);
-        const size_t cells = size_t(res) * res * res;
-        for (size_t i = 0; i < model.occupancy.cell_count(); ++i) {
-            if (!g.occupied[i]) continue;
-            const size_t c = i / cells, local = i % cells;
-            const size_t x = (local % res) / k, y = ((local / res) % res) / k, z = (local / (size_t(res) * res)) / k;
-            const size_t ci = c * size_t(rc) * rc * rc + x + y * rc + z * size_t(rc) * rc;
-            coarse[ci >> 5] |= 1u << (ci & 31);
-        }
-        I.coarse.upload(coarse, "the occupancy grid", "occupancy.resolution");
-    }
+    // The marches read the occupancy as bit fields, inside the box around the occupied cells.
+    const OccupancyBits bits = occupancy_bits(model.occupancy.view());
+    I.occupied.upload(bits.occupied, "the occupancy grid", "occupancy.resolution");
+    if (!bits.coarse.empty()) I.coarse.upload(bits.coarse, "the occupancy grid", "occupancy.resolution");
+    I.box_min = bits.box_min;
+    I.box_max = bits.box_max;
     I.counts.allocate(3);  // live rays (two lists), samples of the round
     cuda_check(cudaMallocHost(&I.host_count, sizeof(uint32_t)), "cudaMallocHost");
     cuda_check(cudaStreamSynchronize(I.stream), "uploading the model");

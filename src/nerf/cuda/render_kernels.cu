@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "core/cuda/device_buffer.h"
+#include "core/cuda/warp_lists.cuh"
 
 namespace npt::nerf::cuda {
 
@@ -14,19 +15,6 @@ __device__ __forceinline__ void write_pixel(const RenderFrame& f, uint32_t pixel
     const float t = expf(-tau);
     const Rgb c = color + f.background * t;
     f.image[pixel] = make_float4(c.x, c.y, c.z, 1.0f - t);
-}
-
-// Appends `item` to a list with one atomic per warp.
-__device__ __forceinline__ void append(bool take, uint32_t item, uint32_t* list, uint32_t* count) {
-    const unsigned mask = __ballot_sync(0xffffffffu, take);
-    if (mask == 0) return;
-    if (!take) return;  // the shuffle below is among the lanes in mask only
-    const int lane = threadIdx.x & 31;
-    const int leader = __ffs(mask) - 1;
-    uint32_t base = 0;
-    if (lane == leader) base = atomicAdd(count, uint32_t(__popc(mask)));
-    base = __shfl_sync(mask, base, leader);
-    list[base + __popc(mask & ((1u << lane) - 1u))] = item;
 }
 
 __global__ void __launch_bounds__(k_block) init_kernel(RenderFrame f, RayCamera cam, uint32_t* alive,
@@ -45,23 +33,7 @@ __global__ void __launch_bounds__(k_block) init_kernel(RenderFrame f, RayCamera 
         f.dirs[i] = r.ray.d;
         if (!live) write_pixel(f, i, Rgb(0.0f), 0.0f);
     }
-    append(live, i, alive, alive_count);
-}
-
-// Reserves `want` consecutive slots with one atomic per warp; every lane of the warp must call it.
-__device__ __forceinline__ uint32_t reserve(uint32_t want, uint32_t* count) {
-    const int lane = threadIdx.x & 31;
-    uint32_t prefix = want;  // inclusive scan of `want` over the warp
-#pragma unroll
-    for (int off = 1; off < 32; off <<= 1) {
-        const uint32_t o = __shfl_up_sync(0xffffffffu, prefix, off);
-        if (lane >= off) prefix += o;
-    }
-    const uint32_t total = __shfl_sync(0xffffffffu, prefix, 31);
-    uint32_t base = 0;
-    if (lane == 31 && total > 0) base = atomicAdd(count, total);
-    base = __shfl_sync(0xffffffffu, base, 31);
-    return base + prefix - want;
+    gpu::warp_append(live, i, alive, alive_count);
 }
 
 __global__ void __launch_bounds__(k_block) march_kernel(RenderFrame f, const uint32_t* alive, uint32_t n, int k,
@@ -81,7 +53,7 @@ __global__ void __launch_bounds__(k_block) march_kernel(RenderFrame f, const uin
         });
         r->cursor = c;
     }
-    const uint32_t base = reserve(uint32_t(j), slots.count);
+    const uint32_t base = gpu::warp_reserve(uint32_t(j), slots.count);
     if (!live) return;
     const float4* mine = slots.scratch + size_t(a) * size_t(k);
     for (int q = 0; q < j; ++q) {
@@ -136,7 +108,7 @@ __global__ void __launch_bounds__(k_block) composite_kernel(RenderFrame f, const
             go_on = true;
         }
     }
-    append(go_on, pixel, next, next_count);
+    gpu::warp_append(go_on, pixel, next, next_count);
 }
 
 unsigned blocks_for(uint32_t n) { return (n + k_block - 1) / k_block; }

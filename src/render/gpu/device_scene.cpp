@@ -1,6 +1,9 @@
 #include "render/gpu/device_scene.h"
 
 #include <algorithm>
+#include <string>
+
+#include "core/error.h"
 
 namespace npt::gpu {
 
@@ -32,7 +35,43 @@ TextureView DeviceLightSet::upload_texture(const TextureView& t) {
     return TextureView{m_texels.back().data(), t.width, t.height};
 }
 
-DeviceVolumes::DeviceVolumes(Span<const media::VolumeView> host) {
+GridTexture::GridTexture(const media::GridView& g) {
+    const size_t n = size_t(g.nx) * size_t(g.ny) * size_t(g.nz);
+    std::vector<float4> texels(n);
+    for (size_t i = 0; i < n; ++i) texels[i] = make_float4(g.density[i], g.color[i].x, g.color[i].y, g.color[i].z);
+    const cudaChannelFormatDesc format = cudaCreateChannelDesc<float4>();
+    const cudaExtent extent = make_cudaExtent(size_t(g.nx), size_t(g.ny), size_t(g.nz));
+    const cudaError_t e = cudaMalloc3DArray(&m_array, &format, extent);
+    if (e == cudaErrorMemoryAllocation)
+        throw Error("GPU out of memory: a volume's texture needs " + std::to_string(n * sizeof(float4) >> 20) +
+                    " MiB (" + std::to_string(g.nx) + "x" + std::to_string(g.ny) + "x" + std::to_string(g.nz) +
+                    " voxels): bake the volume at a lower resolution");
+    cuda_check(e, "cudaMalloc3DArray");
+    cudaMemcpy3DParms copy{};
+    copy.srcPtr = make_cudaPitchedPtr(texels.data(), size_t(g.nx) * sizeof(float4), size_t(g.nx), size_t(g.ny));
+    copy.dstArray = m_array;
+    copy.extent = extent;
+    copy.kind = cudaMemcpyHostToDevice;
+    cuda_check(cudaMemcpy3D(&copy), "cudaMemcpy3D");
+    cudaResourceDesc resource{};
+    resource.resType = cudaResourceTypeArray;
+    resource.res.array.array = m_array;
+    cudaTextureDesc desc{};  // border colour zero: voxels outside the grid count as 0, as on the CPU
+    for (int a = 0; a < 3; ++a) desc.addressMode[a] = cudaAddressModeBorder;
+    desc.filterMode = cudaFilterModeLinear;
+    desc.readMode = cudaReadModeElementType;
+    desc.normalizedCoords = 0;
+    cudaTextureObject_t object = 0;
+    cuda_check(cudaCreateTextureObject(&object, &resource, &desc, nullptr), "cudaCreateTextureObject");
+    m_texture = object;
+}
+
+GridTexture::~GridTexture() {
+    if (m_texture) cudaDestroyTextureObject(cudaTextureObject_t(m_texture));
+    if (m_array) cudaFreeArray(m_array);
+}
+
+DeviceVolumes::DeviceVolumes(Span<const media::VolumeView> host, bool grid_textures) {
     std::vector<media::VolumeView> views(host.data, host.data + host.size);
     // Reserve first: views keep pointers into these buffers, which must not move.
     m_floats.reserve(2 * views.size());
@@ -51,6 +90,10 @@ DeviceVolumes::DeviceVolumes(Span<const media::VolumeView> host) {
             continue;
         }
         const size_t n = size_t(v.grid.nx) * size_t(v.grid.ny) * size_t(v.grid.nz);
+        if (grid_textures) {
+            m_textures.push_back(std::make_unique<GridTexture>(v.grid));
+            v.grid.texture = m_textures.back()->object();
+        }
         m_floats.emplace_back(v.grid.density, n);
         v.grid.density = m_floats.back().data();
         m_colors.emplace_back(v.grid.color, n);
@@ -64,8 +107,8 @@ DeviceVolumes::DeviceVolumes(Span<const media::VolumeView> host) {
     m_views.upload(views);
 }
 
-DeviceScene::DeviceScene(const render::SceneView& host)
-    : m_lights(host.lights), m_volumes(host.volumes), m_view(host) {
+DeviceScene::DeviceScene(const render::SceneView& host, bool grid_textures)
+    : m_lights(host.lights), m_volumes(host.volumes, grid_textures), m_view(host) {
     std::vector<render::MeshView> meshes(host.meshes.data, host.meshes.data + host.meshes.size);
     m_positions.reserve(meshes.size());
     m_normals.reserve(meshes.size());

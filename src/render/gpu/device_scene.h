@@ -3,6 +3,7 @@
 // memory. Host code only.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "core/cuda/device_buffer.h"
@@ -33,13 +34,29 @@ class DeviceLightSet {
     DeviceBuffer<float> m_func, m_conditional, m_marginal;
 };
 
-// The volumes: grids (density, colour, majorant) or NeRF models (parameters, occupancy bytes).
+// A 3D texture of float4 (density, colour) with trilinear filtering and a zero border (media/grid.h).
+class GridTexture {
+  public:
+    explicit GridTexture(const media::GridView& host);
+    ~GridTexture();
+    GridTexture(const GridTexture&) = delete;
+    GridTexture& operator=(const GridTexture&) = delete;
+    unsigned long long object() const { return m_texture; }
+
+  private:
+    cudaArray_t m_array = nullptr;
+    unsigned long long m_texture = 0;
+};
+
+// The volumes: grids (density, colour, majorant; with `grid_textures` also a filtering texture each) or NeRF
+// models (parameters, occupancy bytes).
 class DeviceVolumes {
   public:
-    explicit DeviceVolumes(Span<const media::VolumeView> host);
+    explicit DeviceVolumes(Span<const media::VolumeView> host, bool grid_textures = false);
     Span<const media::VolumeView> view() const { return span_of(m_views); }
 
   private:
+    std::vector<std::unique_ptr<GridTexture>> m_textures;
     std::vector<DeviceBuffer<float>> m_floats;
     std::vector<DeviceBuffer<Vec3>> m_colors;
     std::vector<DeviceBuffer<uint8_t>> m_bytes;
@@ -49,7 +66,9 @@ class DeviceVolumes {
 // The whole scene.
 class DeviceScene {
   public:
-    explicit DeviceScene(const render::SceneView& host);
+    // grid_textures: grids are sampled through hardware-filtered textures (the renderer's choice; the exact
+    // eight-voxel lookup otherwise).
+    explicit DeviceScene(const render::SceneView& host, bool grid_textures = false);
     const render::SceneView& view() const { return m_view; }
     // Per mesh, for building acceleration structures: device positions and indices.
     const DeviceBuffer<Vec3>& positions(size_t mesh) const { return m_positions[mesh]; }

@@ -5,6 +5,7 @@
 
 #include <optix_types.h>
 
+#include "render/gpu/wavefront.h"
 #include "render/path_integrator.h"
 #include "render/scene_view.h"
 
@@ -33,6 +34,7 @@ struct LaunchParams {
     uint32_t sample_begin = 0, sample_count = 0;  // the sample indices this launch adds per pixel
     uint64_t seed = 0;
     render::PathSettings path;
+    WavefrontParams wave;  // the wavefront programs' (wavefront.h); unused by __raygen__render
 };
 
 }  // namespace npt::gpu

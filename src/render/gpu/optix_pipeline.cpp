@@ -26,7 +26,7 @@ struct alignas(OPTIX_SBT_RECORD_ALIGNMENT) Record {
 };
 
 // The programs, in the order of the SBT: raygen, the miss records of the ray types, their hit groups.
-enum Group { g_raygen, g_miss_radiance, g_miss_shadow, g_hit_radiance, g_hit_shadow, g_count };
+enum Group { g_raygen, g_miss_radiance, g_miss_shadow, g_hit_radiance, g_hit_shadow, g_raygen_wavefront, g_count };
 
 std::string log_text(const char* log, size_t size) { return size > 1 ? std::string(log, size - 1) : std::string(); }
 
@@ -37,11 +37,10 @@ OptixPrograms::OptixPrograms(OptixDeviceContext ctx, const std::vector<uint32_t>
     size_t log_size = sizeof log;
 
     OptixModuleCompileOptions module_options{};
-    // NERFPT_OPTIX_MAX_REGISTERS (a benchmark knob, docs/benchmarks.md): fewer registers per thread, more warps
-    // resident to hide latency, at the price of spills.
+    // 96 registers per thread: measured faster than OptiX's default (128) and than 64 on cornell at 1080p
+    // (docs/benchmarks.md); NERFPT_OPTIX_MAX_REGISTERS overrides it for such measurements (0: OptiX's default).
     const char* max_registers = std::getenv("NERFPT_OPTIX_MAX_REGISTERS");
-    module_options.maxRegisterCount =
-        max_registers ? std::atoi(max_registers) : int(OPTIX_COMPILE_DEFAULT_MAX_REGISTER_COUNT);
+    module_options.maxRegisterCount = max_registers ? std::atoi(max_registers) : 96;
     module_options.optLevel = OPTIX_COMPILE_OPTIMIZATION_DEFAULT;
     module_options.debugLevel = OPTIX_COMPILE_DEBUG_LEVEL_MINIMAL;
     OptixPipelineCompileOptions pipeline_options{};
@@ -60,6 +59,8 @@ OptixPrograms::OptixPrograms(OptixDeviceContext ctx, const std::vector<uint32_t>
     OptixProgramGroupDesc desc[g_count]{};
     desc[g_raygen].kind = OPTIX_PROGRAM_GROUP_KIND_RAYGEN;
     desc[g_raygen].raygen = {m_module, "__raygen__render"};
+    desc[g_raygen_wavefront].kind = OPTIX_PROGRAM_GROUP_KIND_RAYGEN;
+    desc[g_raygen_wavefront].raygen = {m_module, "__raygen__wavefront"};
     desc[g_miss_radiance].kind = OPTIX_PROGRAM_GROUP_KIND_MISS;
     desc[g_miss_radiance].miss = {m_module, "__miss__radiance"};
     desc[g_miss_shadow].kind = OPTIX_PROGRAM_GROUP_KIND_MISS;
@@ -93,15 +94,18 @@ OptixPrograms::OptixPrograms(OptixDeviceContext ctx, const std::vector<uint32_t>
                 "optixPipelineSetStackSize");
 
     // The shader binding table: raygen, the miss records in ray-type order, then per build input one hit-group
-    // record per ray type (OptiX picks input * k_ray_types + ray type: the stride and offset optixTrace passes).
-    std::vector<Record> records(3 + k_ray_types * std::max<size_t>(input_meshes.size(), 1));
+    // record per ray type (OptiX picks input * k_ray_types + ray type: the stride and offset optixTrace passes);
+    // last, the wavefront form's raygen record (wavefront.h), which its own copy of the table points to.
+    const size_t hit_records = k_ray_types * std::max<size_t>(input_meshes.size(), 1);
+    std::vector<Record> records(3 + hit_records + 1);
     auto pack = [&](Group g, Record& r) {
         optix_check(optixSbtRecordPackHeader(m_groups[size_t(g)], &r), "optixSbtRecordPackHeader");
     };
     pack(g_raygen, records[0]);
     pack(g_miss_radiance, records[1]);
     pack(g_miss_shadow, records[2]);
-    for (size_t i = 0; 3 + k_ray_types * i < records.size(); ++i) {
+    pack(g_raygen_wavefront, records.back());
+    for (size_t i = 0; k_ray_types * i < hit_records; ++i) {
         Record* hit = &records[3 + k_ray_types * i];
         pack(g_hit_radiance, hit[k_ray_radiance]);
         pack(g_hit_shadow, hit[k_ray_shadow]);
@@ -115,7 +119,9 @@ OptixPrograms::OptixPrograms(OptixDeviceContext ctx, const std::vector<uint32_t>
     m_sbt.missRecordCount = k_ray_types;
     m_sbt.hitgroupRecordBase = base + 3 * sizeof(Record);
     m_sbt.hitgroupRecordStrideInBytes = sizeof(Record);
-    m_sbt.hitgroupRecordCount = unsigned(records.size() - 3);
+    m_sbt.hitgroupRecordCount = unsigned(hit_records);
+    m_sbt_wavefront = m_sbt;
+    m_sbt_wavefront.raygenRecord = base + (records.size() - 1) * sizeof(Record);
 }
 
 OptixPrograms::~OptixPrograms() {

@@ -23,6 +23,8 @@ class OptixPrograms {
 
     OptixPipeline pipeline() const { return m_pipeline; }
     const OptixShaderBindingTable& sbt() const { return m_sbt; }
+    // The same table with the wavefront form's ray-generation program (wavefront.h).
+    const OptixShaderBindingTable& sbt_wavefront() const { return m_sbt_wavefront; }
 
   private:
     OptixModule m_module = nullptr;
@@ -30,6 +32,7 @@ class OptixPrograms {
     OptixPipeline m_pipeline = nullptr;
     DeviceBuffer<unsigned char> m_records;
     OptixShaderBindingTable m_sbt{};
+    OptixShaderBindingTable m_sbt_wavefront{};
 };
 
 }  // namespace npt::gpu

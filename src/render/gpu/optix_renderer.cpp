@@ -7,16 +7,22 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <exception>
+#include <future>
+#include <string>
 
 #include "core/cuda/device_buffer.h"
 #include "core/error.h"
 #include "nerf/cuda/cuda_device.h"
 #include "render/gpu/device_scene.h"
+#include "render/gpu/image_resolve.h"
 #include "render/gpu/optix_accel.h"
 #include "render/gpu/optix_context.h"
 #include "render/gpu/optix_denoiser.h"
 #include "render/gpu/optix_launch.h"
 #include "render/gpu/optix_pipeline.h"
+#include "render/gpu/optix_wavefront.h"
 #include "render/scene_data.h"
 
 namespace npt::gpu {
@@ -36,10 +42,48 @@ struct StreamOwner {
 };
 }  // namespace
 
+// Grids through hardware-filtered textures (2x faster on cornell_volume, the same image within noise;
+// docs/benchmarks.md) unless NERFPT_OPTIX_GRID_TEXTURES=0, a benchmark knob: the exact eight-voxel lookup.
+static bool use_grid_textures() {
+    const char* v = std::getenv("NERFPT_OPTIX_GRID_TEXTURES");
+    return !(v && std::string(v) == "0");
+}
+
+// Scenes with NeRF models are traced in the wavefront form (wavefront.h: the network evaluated in batches on
+// tensor cores) unless NERFPT_OPTIX_WAVEFRONT=0, a benchmark knob: every sample evaluated by its own thread.
+static bool use_wavefront() {
+    const char* v = std::getenv("NERFPT_OPTIX_WAVEFRONT");
+    return !(v && std::string(v) == "0");
+}
+
+// Waves of the wavefront form that run side by side, each on its share of the image (optix_wavefront.h). One:
+// two were measured no faster on h200 (the NeRF demo at 1080p 39.7 against 41.5 frames/s, NeRF only at 800x800
+// 180 against 205: the GPU is busy, not waiting on the pass's synchronisations; docs/benchmarks.md).
+constexpr int k_waves_in_flight = 1;
+
+// Sample slots for an image of `pixels`: enough threads per launch to fill the GPU, at most spp.
+static uint32_t slots_for(size_t pixels, uint32_t spp) {
+    return uint32_t(std::clamp<size_t>((k_threads_per_launch + pixels - 1) / pixels, 1,
+                                       std::min<size_t>(k_max_slots, spp)));
+}
+
 struct OptixRenderer::State {
     State(const scene::Scene& scene, int w, int h)
-        : width(w), height(h), data(scene, w, h), dev(data.view()), accel(ctx.get(), dev, stream.s),
-          programs(ctx.get(), accel.input_meshes()) {}
+        : width(w), height(h), data(scene, w, h), dev(data.view(), use_grid_textures()),
+          accel(ctx.get(), dev, stream.s),
+          programs(ctx.get(), accel.input_meshes()) {
+        if (use_wavefront() && data.view().volumes.size > 0) {
+            const size_t pixels = size_t(w) * size_t(h);
+            const size_t paths = WavefrontLoop::wave_paths(pixels, slots_for(pixels, k_max_slots), k_waves_in_flight);
+            for (int i = 0; i < k_waves_in_flight; ++i) {
+                wavefronts.push_back(std::make_unique<WavefrontLoop>(data.view().volumes, dev.view().volumes, paths));
+                if (!wavefronts.back()->useful()) {
+                    wavefronts.clear();
+                    break;
+                }
+            }
+        }
+    }
     int width, height;
     render::SceneData data;
     DeviceScene dev;
@@ -47,6 +91,12 @@ struct OptixRenderer::State {
     StreamOwner stream;
     OptixAccel accel;
     OptixPrograms programs;
+    std::vector<std::unique_ptr<WavefrontLoop>> wavefronts;  // empty: the per-thread form
+    // Kept from frame to frame (an allocation and a free cost more than a 1080p frame of the baked demo).
+    DeviceBuffer<float4> accum;
+    DeviceBuffer<float> rgb;
+    DeviceBuffer<unsigned long long> dropped{1};
+    DeviceBuffer<LaunchParams> params{1};
 };
 
 OptixRenderer::OptixRenderer(const scene::Scene& scene, int width, int height) {
@@ -71,13 +121,14 @@ Image OptixRenderer::render(const render::RenderOptions& options, const render::
     const size_t pixels = size_t(width) * size_t(height);
     // Sample slots: a launch of width x height x slots threads, slot z tracing samples z, z + slots, ... of its
     // pixel into its own plane of sums; the planes are added in a fixed order, so a seed gives one image.
-    const uint32_t slots = uint32_t(std::clamp<size_t>((k_threads_per_launch + pixels - 1) / pixels, 1,
-                                                       std::min<size_t>(k_max_slots, spp)));
-    DeviceBuffer<float4> accum(pixels * slots, "the image", "--res");
-    accum.zero_async(stream);
-    DeviceBuffer<unsigned long long> dropped(1);
+    const uint32_t slots = slots_for(pixels, spp);
+    DeviceBuffer<float4>& accum = m->accum;
+    if (accum.size() < pixels * slots) accum.allocate(pixels * slots, "the image", "--res");
+    cuda_check(cudaMemsetAsync(accum.data(), 0, pixels * slots * sizeof(float4), stream), "cudaMemsetAsync");
+    if (m->rgb.size() != 3 * pixels) m->rgb.allocate(3 * pixels, "the image", "--res");
+    const DeviceBuffer<unsigned long long>& dropped = m->dropped;
     dropped.zero_async(stream);
-    DeviceBuffer<LaunchParams> params(1);
+    const DeviceBuffer<LaunchParams>& params = m->params;
     DeviceBuffer<float4> albedo, normal;  // the denoiser's guides
     if (denoised) {
         albedo.allocate(pixels, "the denoiser's guides", "--res");
@@ -99,6 +150,44 @@ Image OptixRenderer::render(const render::RenderOptions& options, const render::
 
     const uint64_t total = uint64_t(pixels) * spp;
     uint32_t done = 0, batch = slots;  // the first launch: one sample per slot
+    if (!m->wavefronts.empty()) {
+        if (denoised) {
+            // The guides only: the per-thread program with no samples writes them (sample_begin 0, slot 0).
+            p.sample_begin = p.sample_count = 0;
+            cuda_check(cudaMemcpyAsync(params.data(), &p, sizeof p, cudaMemcpyHostToDevice, stream), "cudaMemcpyAsync");
+            optix_check(optixLaunch(m->programs.pipeline(), stream, CUdeviceptr(params.data()), sizeof(LaunchParams),
+                                    &m->programs.sbt(), unsigned(width), unsigned(height), 1),
+                        "optixLaunch");
+        }
+        // The waves' streams start from cleared sums (and guides that are written).
+        cuda_check(cudaStreamSynchronize(stream), "rendering with OptiX");
+        const size_t n_waves = m->wavefronts.size();
+        for (; done < spp; done += batch) {
+            batch = std::min(slots, spp - done);
+            p.sample_begin = done;
+            // Each wave its part of the image, from its own host thread (the pass blocks on its counts).
+            std::vector<std::future<void>> others;
+            for (size_t k = 1; k < n_waves; ++k)
+                others.push_back(std::async(std::launch::async, [&, k] {
+                    m->wavefronts[k]->run_wave(p, batch, uint32_t(k), uint32_t(n_waves), m->programs);
+                }));
+            std::exception_ptr failed;
+            try {
+                m->wavefronts[0]->run_wave(p, batch, 0, uint32_t(n_waves), m->programs);
+            } catch (...) {
+                failed = std::current_exception();
+            }
+            for (auto& f : others) {
+                try {
+                    f.get();
+                } catch (...) {
+                    if (!failed) failed = std::current_exception();
+                }
+            }
+            if (failed) std::rethrow_exception(failed);
+            if (progress) progress(uint64_t(pixels) * (done + batch), total);
+        }
+    }
     while (done < spp) {
         p.sample_begin = done;
         p.sample_count = std::min(batch, spp - done);
@@ -118,21 +207,14 @@ Image OptixRenderer::render(const render::RenderOptions& options, const render::
         batch = std::max(slots, uint32_t(next) / slots * slots);
     }
 
-    const std::vector<float4> sums = accum.download();
-    const unsigned long long bad = dropped.download()[0];
-    if (bad > 0) spdlog::warn("render: {} samples were NaN or infinite and were dropped", bad);
+    resolve_image(accum.data(), slots, pixels, 1.0f / float(spp), m->rgb.data(), stream);
     Image image(width, height, 3);
-    const float inv = 1.0f / float(spp);
-    for (size_t i = 0; i < pixels; ++i) {
-        float r = 0.0f, g = 0.0f, b = 0.0f;
-        for (uint32_t z = 0; z < slots; ++z) {
-            const float4& s = sums[z * pixels + i];
-            r += s.x, g += s.y, b += s.z;
-        }
-        image.pixels[3 * i + 0] = r * inv;
-        image.pixels[3 * i + 1] = g * inv;
-        image.pixels[3 * i + 2] = b * inv;
-    }
+    cuda_check(cudaMemcpyAsync(image.pixels.data(), m->rgb.data(), m->rgb.bytes(), cudaMemcpyDeviceToHost, stream),
+               "downloading the image");
+    unsigned long long bad = 0;
+    cuda_check(cudaMemcpyAsync(&bad, dropped.data(), sizeof bad, cudaMemcpyDeviceToHost, stream), "cudaMemcpyAsync");
+    cuda_check(cudaStreamSynchronize(stream), "rendering with OptiX");
+    if (bad > 0) spdlog::warn("render: {} samples were NaN or infinite and were dropped", bad);
     if (denoiser) *denoised = denoiser->run(image, albedo.data(), normal.data());
     return image;
 }

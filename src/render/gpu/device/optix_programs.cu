@@ -96,6 +96,99 @@ extern "C" __global__ void __raygen__render() {
     }
 }
 
+// ---- The wavefront form (wavefront.h): one launch takes each path one vertex further and stops it wherever a
+// NeRF segment is needed; the NeRF pass (nerf_segments.h) evaluates those between launches.
+
+namespace {
+
+// Traces the path's ray and finds the volumes on [0, hit): inline, or queued for the NeRF pass.
+__device__ void begin_segment(gpu::WavefrontPath& p, SobolSampler& sampler, const OptixTracer& tracer) {
+    p.found = tracer.intersect(p.ray, INFINITY, &p.hit);
+    p.vol = media::VolumeResult{};
+    if (params.scene.volumes.size > 0)
+        gpu::volume_segment(params.scene.volumes, params.wave.nerf_slot, p.ray, 0.0f, p.found ? p.hit.t : INFINITY,
+                            sampler.next_1d(), false, &p.query[0], &p.vol);
+    p.phase = gpu::PathPhase::Scatter;
+}
+
+__device__ void write_path(gpu::WavefrontPath& p) {
+    const Rgb l = p.st.radiance;
+    if (is_finite(l)) {
+        float4& a = params.accum[size_t(p.slot) * size_t(params.width) * size_t(params.height) + p.pixel];
+        a = make_float4(a.x + l.x, a.y + l.y, a.z + l.z, 0.0f);
+    } else {
+        atomicAdd(params.dropped, 1ull);
+    }
+    p.phase = gpu::PathPhase::Done;
+}
+
+}  // namespace
+
+extern "C" __global__ void __raygen__wavefront() {
+    const uint32_t i = optixGetLaunchIndex().x;
+    const gpu::WavefrontParams& w = params.wave;
+    const OptixTracer tracer;
+    if (!w.active) {
+        // A new wave: path i is sample sample_begin + i / locals of the wave's pixel i % locals.
+        const uint32_t locals = w.stripes * gpu::k_wave_stripe;
+        gpu::WavefrontPath p;
+        p.pixel = gpu::wave_pixel(w, i % locals);
+        p.slot = i / locals;
+        if (p.pixel >= uint32_t(params.width) * uint32_t(params.height)) {  // past the last pixel: no path
+            p.phase = gpu::PathPhase::Done;
+            w.paths[i] = p;
+            return;
+        }
+        const uint32_t x = p.pixel % uint32_t(params.width), y = p.pixel / uint32_t(params.width);
+        SobolSampler sampler(params.seed, x, y, params.sample_begin + p.slot);
+        p.ray = render::generate_camera_ray(params.scene.camera, int(x), int(y), sampler.next_2d());
+        p.st.prev_p = p.ray.o;
+        begin_segment(p, sampler, tracer);
+        p.sampler = sampler;
+        w.paths[i] = p;
+        return;
+    }
+    gpu::WavefrontPath& slot = w.paths[w.active[i]];
+    gpu::WavefrontPath p = slot;
+    SobolSampler sampler = p.sampler;
+    p.query[0].slot = p.query[1].slot = gpu::k_no_query;
+    if (p.shadow_pending) {
+        p.st.radiance += p.shadow_contribution * p.shadow_t;
+        p.shadow_pending = false;
+    }
+    if (p.phase == gpu::PathPhase::Finish || !render::path_add_volume(p.st, p.vol)) {
+        write_path(p);
+    } else {
+        // trace_path's loop body after the volume ray (path_integrator.h).
+        render::ShadowRequest shadow;
+        Ray next;
+        const bool more = render::path_scatter(params.scene, tracer, p.st, p.ray, p.found, p.hit, sampler,
+                                               params.path, &shadow, &next);
+        if (shadow.pending) {
+            p.shadow_t = 1.0f;
+            p.shadow_contribution = shadow.contribution;
+            const bool queued = params.scene.volumes.size > 0 &&
+                                gpu::volume_segment(params.scene.volumes, w.nerf_slot, shadow.ray, 0.0f, shadow.tmax,
+                                                    shadow.xi, true, &p.query[1], &p.vol);
+            // Not queued: p.vol holds the inline result (it is not needed any more: path_add_volume used it).
+            if (queued)
+                p.shadow_pending = true;
+            else
+                p.st.radiance += shadow.contribution * (params.scene.volumes.size > 0 ? p.vol.transmittance : 1.0f);
+        }
+        if (more) {
+            p.ray = next;
+            begin_segment(p, sampler, tracer);
+        } else if (p.shadow_pending) {
+            p.phase = gpu::PathPhase::Finish;
+        } else {
+            write_path(p);
+        }
+    }
+    p.sampler = sampler;
+    slot = p;
+}
+
 extern "C" __global__ void __closesthit__radiance() {
     const float2 b = optixGetTriangleBarycentrics();
     optixSetPayload_0(__float_as_uint(optixGetRayTmax()));

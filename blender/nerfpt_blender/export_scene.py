@@ -1,0 +1,394 @@
+"""A Blender scene as a glTF that nerfpt renders: Blender's glTF exporter (extras, cameras, punctual lights,
+modifiers applied), then the add-on's additions (gltf_post): a `volume` cube per capture object, materials the
+exporter cannot map (Diffuse, Glossy, Glass, Emission shaders), the render settings and the world colour as scene
+extras. Everything nerfpt would not render as Cycles does is collected as one list of warnings
+(docs/blender.md has the mapping table).
+"""
+
+import json
+import math
+import os
+
+import bpy
+from mathutils import Matrix
+
+from . import gltf_post
+from .nerfpt_cli import NerfptError, ignored_report
+
+CUBE_BIN = "nerfpt_volumes.bin"
+
+# Principled BSDF inputs nerfpt ignores, with the value at which they do nothing (3.x and 4.x names).
+_IGNORED_PRINCIPLED = [
+    (("Subsurface", "Subsurface Weight"), 0.0, "subsurface"),
+    (("Sheen", "Sheen Weight"), 0.0, "sheen"),
+    (("Clearcoat", "Coat Weight"), 0.0, "clearcoat"),
+    (("Anisotropic",), 0.0, "anisotropy"),
+    (("Alpha",), 1.0, "alpha"),
+]
+
+
+def _exporter_options(filepath):
+    """The exporter's keywords, under the names this Blender's exporter uses (3.4 and 4.x differ)."""
+    wanted = {
+        "filepath": filepath,
+        "check_existing": False,
+        "export_format": "GLTF_SEPARATE",
+        "use_selection": False,
+        "use_visible": False,
+        "use_renderable": True,
+        "use_active_scene": True,
+        "export_extras": True,
+        "export_cameras": True,
+        "export_lights": True,
+        "export_apply": True,
+        "export_yup": True,
+        "export_animations": False,
+        "export_materials": "EXPORT",
+        "will_save_settings": False,
+        # W and W/m^2 divided by 4 pi for point and spot lights, not multiplied by 683 lm/W: the radiometric
+        # intensity Cycles' lights have, which nerfpt's `intensity` is.
+        ("export_import_convert_lighting_mode", "convert_lighting_mode"): "COMPAT",
+    }
+    known = set(bpy.ops.export_scene.gltf.get_rna_type().properties.keys())
+    options = {}
+    for key, value in wanted.items():
+        for name in key if isinstance(key, tuple) else (key,):
+            if name in known:
+                options[name] = value
+                break
+    return options
+
+
+def renders(obj, view_layer):
+    """Whether a final render shows obj: in the view layer, not disabled for rendering."""
+    if obj.name not in view_layer.objects or obj.hide_render:
+        return False
+    return not any(c.hide_render for c in obj.users_collection)
+
+
+def _linked_shader(socket):
+    if not socket.is_linked:
+        return None
+    node = socket.links[0].from_node
+    while node.type == "REROUTE" and node.inputs[0].is_linked:
+        node = node.inputs[0].links[0].from_node
+    return node
+
+
+def _active_output(mat):
+    outs = [n for n in mat.node_tree.nodes if n.type == "OUTPUT_MATERIAL"]
+    for target in ("CYCLES", "ALL"):
+        for n in outs:
+            if n.is_active_output and n.target in (target,):
+                return n
+    return next((n for n in outs if n.is_active_output), outs[0] if outs else None)
+
+
+def _value(node, *names):
+    for name in names:
+        s = node.inputs.get(name)
+        if s is not None:
+            return s
+    return None
+
+
+def _constant(socket, what, notes):
+    """A socket's own value; a linked socket (a texture) is noted and its unlinked value used."""
+    if socket.is_linked:
+        notes.append(f"{what} is linked (textures on this shader are ignored; its value is used)")
+    v = socket.default_value
+    return list(v) if hasattr(v, "__len__") else float(v)
+
+
+def map_material(mat, notes):
+    """A glTF material for shaders the exporter does not map, or None to keep the exporter's."""
+    if not mat.use_nodes or mat.node_tree is None:
+        return gltf_post.lambert(list(mat.diffuse_color))
+    out = _active_output(mat)
+    if out is None:
+        notes.append("no Material Output node: black")
+        return gltf_post.emitter([0, 0, 0], 0.0)
+    if out.inputs["Volume"].is_linked:
+        notes.append(
+            "volume shaders on meshes are ignored (import captures with File > Import > nerfpt model)"
+        )
+    shader = _linked_shader(out.inputs["Surface"])
+    if shader is None:
+        notes.append("no surface shader: black")
+        return gltf_post.emitter([0, 0, 0], 0.0)
+    kind = shader.type
+    if kind == "BSDF_PRINCIPLED":
+        for names, neutral, label in _IGNORED_PRINCIPLED:
+            s = _value(shader, *names)
+            if s is not None and (s.is_linked or abs(float(s.default_value) - neutral) > 1e-6):
+                notes.append(f"Principled {label} is ignored")
+        return None
+    if kind == "BSDF_DIFFUSE":
+        rough = _constant(shader.inputs["Roughness"], "Diffuse Roughness", notes)
+        if rough > 0:
+            notes.append("Diffuse roughness (Oren-Nayar) is ignored: Lambert")
+        return gltf_post.lambert(_constant(shader.inputs["Color"], "Diffuse Color", notes))
+    if kind == "EMISSION":
+        color = _constant(shader.inputs["Color"], "Emission Color", notes)
+        return gltf_post.emitter(color, _constant(shader.inputs["Strength"], "Emission Strength", notes))
+    if kind in ("BSDF_GLOSSY", "BSDF_ANISOTROPIC"):
+        color = _constant(shader.inputs["Color"], "Glossy Color", notes)
+        return gltf_post.metal(color, _constant(shader.inputs["Roughness"], "Glossy Roughness", notes))
+    if kind == "BSDF_GLASS":
+        color = _constant(shader.inputs["Color"], "Glass Color", notes)
+        rough = _constant(shader.inputs["Roughness"], "Glass Roughness", notes)
+        return gltf_post.glass(color, rough, _constant(shader.inputs["IOR"], "Glass IOR", notes))
+    notes.append(
+        f"surface shader '{shader.name}' ({shader.bl_label}) is not supported: the exporter's guess is used"
+    )
+    return None
+
+
+def _world_background(world, notes):
+    """Constant linear RGB radiance of the world, which nerfpt sees where rays leave the scene."""
+    if world is None:
+        return [0.0, 0.0, 0.0]
+    if not world.use_nodes or world.node_tree is None:
+        return list(world.color[:3])
+    out = next((n for n in world.node_tree.nodes if n.type == "OUTPUT_WORLD" and n.is_active_output), None)
+    bg = _linked_shader(out.inputs["Surface"]) if out else None
+    if bg is None:
+        return [0.0, 0.0, 0.0]
+    if bg.type != "BACKGROUND":
+        notes.append(f"world shader '{bg.bl_label}' is not supported: black")
+        return [0.0, 0.0, 0.0]
+    if bg.inputs["Color"].is_linked or bg.inputs["Strength"].is_linked:
+        notes.append("world: only a constant background colour is used (environment textures are ignored)")
+    strength = float(bg.inputs["Strength"].default_value)
+    return [float(c) * strength for c in bg.inputs["Color"].default_value[:3]]
+
+
+def _scale_factors(matrix):
+    return [math.sqrt(sum(matrix[r][c] ** 2 for r in range(3))) for c in range(3)]
+
+
+def _volume_extras(obj, world, gltf_dir, absolute_paths, notes):
+    s = obj.nerfpt_volume
+    grid = os.path.abspath(bpy.path.abspath(obj.data.filepath))
+    model = os.path.abspath(bpy.path.abspath(s.model_path)) if s.model_path else ""
+    use_model = s.source == "MODEL" and model
+    if s.source == "MODEL" and not model:
+        notes.append(f"capture '{obj.name}' has no model file: its grid is rendered")
+    path = model if use_model else grid
+    if not os.path.isfile(path):
+        raise NerfptError(f"capture '{obj.name}': file '{path}' not found")
+    if not absolute_paths:
+        try:
+            path = os.path.relpath(path, gltf_dir)
+        except ValueError:  # another drive
+            pass
+    density_scale = s.density_scale
+    scales = _scale_factors(world)
+    if not use_model and s.local_density:
+        # nerfpt reads a grid's density per world unit; the grid holds it per local unit.
+        mean = (scales[0] * scales[1] * scales[2]) ** (1.0 / 3.0)
+        if max(scales) > 1.001 * min(scales):
+            notes.append(
+                f"capture '{obj.name}' is scaled unevenly: nerfpt renders its grid with the mean scale "
+                "(exact for the model, source Model)"
+            )
+        density_scale = density_scale / mean if mean > 0 else density_scale
+    volume = {
+        "file": path.replace(os.sep, "/"),
+        "density_scale": density_scale,
+        "emission_scale": s.emission_scale,
+        "casts_shadows": bool(s.casts_shadows),
+        "step_voxels": s.step_voxels,
+    }
+    if use_model and s.use_crop:
+        volume["crop"] = {"min": list(s.crop_min), "max": list(s.crop_max)}
+    return {"volume": volume}
+
+
+def _check_scene(scene, view_layer, camera, notes):
+    r = scene.render
+    if r.use_border:
+        notes.append("render region (border) is ignored: the whole frame is rendered")
+    if r.pixel_aspect_x != r.pixel_aspect_y:
+        notes.append("non-square pixel aspect is ignored")
+    if r.film_transparent:
+        notes.append("transparent film is ignored: the world colour is the background")
+    if r.use_motion_blur:
+        notes.append("motion blur is ignored")
+    if camera is not None:
+        cam = camera.data
+        if cam.type != "PERSP":
+            notes.append(
+                f"camera '{camera.name}' is {cam.type.lower()}: nerfpt renders perspective cameras only"
+            )
+        if cam.dof.use_dof:
+            notes.append("depth of field is ignored")
+        if cam.shift_x or cam.shift_y:
+            notes.append("camera shift is ignored")
+    for obj in scene.objects:
+        if not renders(obj, view_layer):
+            continue
+        if obj.type == "LIGHT":
+            light = obj.data
+            if light.type == "AREA":
+                notes.append(f"area light '{obj.name}' is not exported (use an emissive mesh)")
+            elif getattr(light, "shadow_soft_size", 0) > 0 and light.type in ("POINT", "SPOT"):
+                notes.append(f"light '{obj.name}': its radius is ignored (a point light: hard shadows)")
+            elif light.type == "SUN" and light.angle > 0:
+                notes.append(f"sun '{obj.name}': its angle is ignored (hard shadows)")
+        elif obj.type == "VOLUME" and not obj.nerfpt_volume.is_capture:
+            notes.append(
+                f"volume '{obj.name}' is not a nerfpt capture (File > Import > nerfpt model): not exported"
+            )
+        elif obj.type in ("GPENCIL", "CURVES", "POINTCLOUD"):
+            notes.append(f"{obj.type.lower()} object '{obj.name}' is not exported")
+        if obj.type == "MESH":
+            for ps in obj.particle_systems:
+                if ps.settings.type == "HAIR":
+                    notes.append(f"hair on '{obj.name}' is not exported")
+
+
+def _notes_text(notes):
+    seen = []
+    for n in notes:
+        if n not in seen:
+            seen.append(n)
+    return seen
+
+
+def max_depth(scene):
+    """nerfpt's --max-depth counts scattering events, so direct light alone is depth 1; Blender's (Cycles')
+    "max bounces" counts bounces after the first hit, direct light alone being 0."""
+    return scene.nerfpt.max_bounces + 1
+
+
+def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
+    """Writes filepath (.gltf + .bin + textures beside it) with the scene's nerfpt render settings as scene
+    extras. Returns the list of warnings. Raises NerfptError. Must run on the main thread (the exporter is an
+    operator)."""
+    gltf_dir = os.path.dirname(os.path.abspath(filepath))
+    notes = []
+    camera = scene.camera
+    _check_scene(scene, view_layer, camera, notes)
+    override = {"scene": scene, "view_layer": view_layer}
+    wm = bpy.context.window_manager
+    if wm.windows:
+        override["window"] = wm.windows[0]
+    try:
+        with bpy.context.temp_override(**override):
+            result = bpy.ops.export_scene.gltf(**_exporter_options(filepath))
+            # Final transforms (constraints, parents, drivers), as the exporter saw them.
+            depsgraph = bpy.context.evaluated_depsgraph_get()
+    except (RuntimeError, TypeError) as e:
+        last = [ln for ln in str(e).strip().splitlines() if ln.strip()]
+        raise NerfptError(
+            "Blender's glTF export failed: " + (last[-1].strip() if last else "unknown error")
+        ) from None
+    if "FINISHED" not in result or not os.path.isfile(filepath):
+        raise NerfptError("Blender's glTF export wrote nothing")
+
+    with open(filepath) as f:
+        gltf = json.load(f)
+
+    # Materials the exporter cannot map.
+    for i, m in enumerate(gltf.get("materials", [])):
+        mat = bpy.data.materials.get(m.get("name", ""))
+        if mat is None:
+            continue
+        mat_notes = []
+        mapped = map_material(mat, mat_notes)
+        if m.get("name") == gltf_post.VOLUME_MATERIAL:
+            mat_notes.append("a material named 'volume' makes nerfpt treat its meshes as volume cubes")
+        if mapped is not None:
+            gltf_post.replace_material(gltf, i, mapped)
+        else:
+            gltf_post.no_specular_when_black(m)
+        notes += [f"material '{mat.name}': {n}" for n in mat_notes]
+
+    # The captures' volume cubes.
+    cubes = []
+    for obj in scene.objects:
+        if obj.type != "VOLUME" or not obj.nerfpt_volume.is_capture or not renders(obj, view_layer):
+            continue
+        s = obj.nerfpt_volume
+        world = obj.evaluated_get(depsgraph).matrix_world
+        cube = world @ Matrix.Translation(s.voxel_shift)  # volume_material, "Voxel centres"
+        cubes.append(
+            {
+                "name": obj.name,
+                "matrix": gltf_post.gltf_node_matrix(cube),
+                "min": list(s.cube_min),
+                "max": list(s.cube_max),
+                "extras": _volume_extras(obj, world, gltf_dir, absolute_paths, notes),
+            }
+        )
+    data = gltf_post.add_volume_cubes(gltf, cubes, CUBE_BIN)
+    if data:
+        with open(os.path.join(gltf_dir, CUBE_BIN), "wb") as f:
+            f.write(data)
+
+    r = scene.render
+    width, height = resolution or (
+        r.resolution_x * r.resolution_percentage // 100,
+        r.resolution_y * r.resolution_percentage // 100,
+    )
+    gltf_post.set_scene_extras(
+        gltf,
+        width=max(1, width),
+        height=max(1, height),
+        spp=scene.nerfpt.samples,
+        max_depth=max_depth(scene),
+        background=_world_background(scene.world, notes),
+    )
+    tmp = filepath + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(gltf, f, indent=1)
+    os.replace(tmp, filepath)
+    return _notes_text(notes)
+
+
+class NERFPT_OT_export_scene(bpy.types.Operator):
+    """Export the scene as glTF for nerfpt: captures as `volume` cubes, render settings as scene extras"""
+
+    bl_idname = "export_scene.nerfpt_gltf"
+    bl_label = "Export nerfpt scene"
+    bl_options = {"REGISTER"}
+
+    filepath: bpy.props.StringProperty(subtype="FILE_PATH")
+    filter_glob: bpy.props.StringProperty(default="*.gltf", options={"HIDDEN"})
+
+    def invoke(self, context, event):
+        if not self.filepath:
+            blend = bpy.data.filepath
+            self.filepath = (os.path.splitext(blend)[0] if blend else "scene") + ".gltf"
+        context.window_manager.fileselect_add(self)
+        return {"RUNNING_MODAL"}
+
+    def execute(self, context):
+        path = bpy.path.ensure_ext(bpy.path.abspath(self.filepath), ".gltf")
+        try:
+            notes = export(context.scene, context.view_layer, path)
+        except NerfptError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        warning = ignored_report(notes)
+        if warning:
+            self.report({"WARNING"}, warning)
+        self.report(
+            {"INFO"}, f"wrote {path} (render it with: nerfpt render {os.path.basename(path)} -o out.exr)"
+        )
+        return {"FINISHED"}
+
+
+def menu_export(self, context):
+    self.layout.operator(NERFPT_OT_export_scene.bl_idname, text="nerfpt scene (.gltf)")
+
+
+def register():
+    bpy.utils.register_class(NERFPT_OT_export_scene)
+    bpy.types.TOPBAR_MT_file_export.append(menu_export)
+
+
+def unregister():
+    bpy.types.TOPBAR_MT_file_export.remove(menu_export)
+    bpy.utils.unregister_class(NERFPT_OT_export_scene)

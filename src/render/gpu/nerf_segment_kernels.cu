@@ -1,0 +1,170 @@
+#include "render/gpu/nerf_segment_kernels.h"
+
+#include "core/cuda/device_buffer.h"
+#include "core/cuda/warp_lists.cuh"
+#include "core/srgb.h"
+
+namespace npt::gpu {
+
+namespace {
+
+constexpr int k_block = 128;
+
+unsigned blocks_for(uint32_t n) { return (n + k_block - 1) / k_block; }
+
+// The segment's result, where the path reads it.
+__device__ __forceinline__ void write_result(WavefrontPath& p, int kind, Rgb radiance, float transmittance) {
+    if (kind == 0) {
+        p.vol.radiance = radiance;
+        p.vol.transmittance = transmittance;
+    } else {
+        p.shadow_t = transmittance;
+    }
+}
+
+__global__ void __launch_bounds__(k_block) gather_kernel(WavefrontPath* paths, const uint32_t* active, uint32_t n,
+                                                          uint32_t* next, uint32_t* next_count, SegmentLists lists) {
+    const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    const bool in = i < n;
+    const uint32_t id = in ? (active ? active[i] : i) : 0u;
+    uint32_t slot[2] = {k_no_query, k_no_query};
+    bool go_on = false;
+    if (in) {
+        const WavefrontPath& p = paths[id];
+        go_on = p.phase != PathPhase::Done;
+        slot[0] = p.query[0].slot;
+        slot[1] = p.query[1].slot;
+    }
+    warp_append(go_on, id, next, next_count);
+    // The same trip counts in every lane: warp_append needs them all.
+    for (uint32_t l = 0; l < lists.lists; ++l)
+        for (uint32_t kind = 0; kind < 2; ++kind)
+            warp_append(slot[kind] == l, segment_item(id, int(kind)), lists.items + size_t(l) * lists.capacity,
+                        lists.counts + l);
+}
+
+__global__ void __launch_bounds__(k_block) start_kernel(NerfSegmentModel m, WavefrontPath* paths,
+                                                         const uint32_t* list, uint32_t n, SegmentState* states,
+                                                         Vec3* dirs, uint32_t* live, uint32_t* live_count) {
+    const uint32_t j = blockIdx.x * blockDim.x + threadIdx.x;
+    bool marching = false;
+    if (j < n) {
+        const int kind = segment_kind(list[j]);
+        WavefrontPath& p = paths[segment_path(list[j])];
+        const NerfQuery q = p.query[kind];
+        nerf::MarchParams mp = m.march;
+        mp.t_max = q.t_max;
+        SegmentState s;
+        s.ray = q.ray;
+        // march_nerf's march (march_ray_visit with the lattice offset xi), clipped to the occupied box, which
+        // leaves its samples as they are (ray_march.h).
+        marching = nerf::march_start(mp, m.grid, q.ray, q.xi, &s.cursor) &&
+                   nerf::march_clip(mp, q.ray, m.box_min, m.box_max, &s.cursor) && !s.cursor.done(mp);
+        states[j] = s;
+        dirs[j] = q.ray.d;
+        if (!marching) write_result(p, kind, Rgb(0.0f), 1.0f);
+    }
+    warp_append(marching, j, live, live_count);
+}
+
+__global__ void __launch_bounds__(k_block) march_kernel(NerfSegmentModel m, SegmentState* states,
+                                                         const uint32_t* live, uint32_t n, int k,
+                                                         SegmentSamples samples) {
+    const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
+    const bool in = a < n;
+    const uint32_t j = in ? live[a] : 0u;
+    int used = 0;
+    float4* mine = samples.scratch + size_t(a) * size_t(k);
+    if (in) {
+        SegmentState& s = states[j];
+        const Ray ray = s.ray;
+        nerf::MarchCursor c = s.cursor;  // in registers while marching
+        nerf::march_continue(m.march, m.grid, ray, c, [&](const nerf::MarchSample& x) {
+            mine[used++] = make_float4(x.position.x, x.position.y, x.position.z, x.dt);
+            return used < k;
+        });
+        s.cursor = c;
+    }
+    const uint32_t base = warp_reserve(uint32_t(used), samples.count);
+    if (!in) return;
+    for (int q = 0; q < used; ++q) {
+        const float4 v = mine[q];
+        samples.pos[base + q] = Vec3(v.x, v.y, v.z);
+        samples.dt[base + q] = v.w;
+        samples.owner[base + q] = j;
+    }
+    samples.first[a] = base;
+    samples.used[a] = uint8_t(used);
+}
+
+__global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, WavefrontPath* paths,
+                                                             const uint32_t* list, SegmentState* states,
+                                                             const uint32_t* live, uint32_t n,
+                                                             SegmentSamples samples, const float* sigma,
+                                                             const Rgb* rgb, uint32_t* next, uint32_t* next_count) {
+    const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
+    bool go_on = false;
+    uint32_t j = 0;
+    if (a < n) {
+        j = live[a];
+        const int kind = segment_kind(list[j]);
+        SegmentState& s = states[j];
+        // media::march_nerf's compositing, sample by sample (volume_integrator.h).
+        media::Accumulator acc;
+        acc.radiance = s.radiance;
+        acc.log_t = s.log_t;
+        acc.with_emission = kind == 0;
+        const uint32_t base = samples.first[a];
+        const int used = samples.used[a];
+        for (int q = 0; q < used && !acc.done(); ++q) {
+            Rgb c(0.0f);
+            if (acc.with_emission) {
+                const Rgb srgb = rgb[base + q];
+                c = Rgb(srgb_to_linear(srgb.x), srgb_to_linear(srgb.y), srgb_to_linear(srgb.z)) * m.emission_scale;
+            }
+            acc.add(sigma[base + q] * m.density_scale, c, samples.dt[base + q]);
+        }
+        if (acc.done() || s.cursor.done(m.march)) {
+            write_result(paths[segment_path(list[j])], kind, acc.radiance, acc.done() ? 0.0f : expf(acc.log_t));
+        } else {
+            s.radiance = acc.radiance;
+            s.log_t = acc.log_t;
+            go_on = true;
+        }
+    }
+    warp_append(go_on, j, next, next_count);
+}
+
+}  // namespace
+
+void segment_gather(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next, uint32_t* next_count,
+                    const SegmentLists& lists, cudaStream_t s) {
+    if (n == 0) return;
+    gather_kernel<<<blocks_for(n), k_block, 0, s>>>(paths, active, n, next, next_count, lists);
+    NPT_CUDA_CHECK_LAUNCH("segment gather_kernel");
+}
+
+void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, uint32_t n,
+                   SegmentState* states, Vec3* dirs, uint32_t* live, uint32_t* live_count, cudaStream_t s) {
+    if (n == 0) return;
+    start_kernel<<<blocks_for(n), k_block, 0, s>>>(m, paths, list, n, states, dirs, live, live_count);
+    NPT_CUDA_CHECK_LAUNCH("segment start_kernel");
+}
+
+void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
+                   const SegmentSamples& samples, cudaStream_t s) {
+    if (n == 0) return;
+    march_kernel<<<blocks_for(n), k_block, 0, s>>>(m, states, live, n, k, samples);
+    NPT_CUDA_CHECK_LAUNCH("segment march_kernel");
+}
+
+void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,
+                       const uint32_t* live, uint32_t n, const SegmentSamples& samples, const float* sigma,
+                       const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s) {
+    if (n == 0) return;
+    composite_kernel<<<blocks_for(n), k_block, 0, s>>>(m, paths, list, states, live, n, samples, sigma, rgb,
+                                                       next, next_count);
+    NPT_CUDA_CHECK_LAUNCH("segment composite_kernel");
+}
+
+}  // namespace npt::gpu

@@ -1,0 +1,63 @@
+// Kernels of the wavefront path tracer's NeRF pass (nerf_segments.h): gather the queued segments, start their
+// marches, march a few samples per live segment, composite the evaluated samples. The field itself is
+// evaluated between march and composite by the view renderer's kernels (hash_encode, mlp_inference).
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <cstdint>
+
+#include "core/platform.h"
+#include "render/gpu/nerf_segments.h"
+
+namespace npt::gpu {
+
+// Where a segment's march stands and what it has gathered (media::Accumulator's radiance and log T).
+struct SegmentState {
+    Ray ray;
+    nerf::MarchCursor cursor;
+    float log_t = 0.0f;
+    Rgb radiance{0.0f};
+};
+
+struct SegmentSamples {          // the samples of a round, packed (each live segment reserves what it marched)
+    Vec3* pos = nullptr;
+    float* dt = nullptr;
+    uint32_t* owner = nullptr;   // per sample: the segment's index in its list (the MLP's direction index)
+    uint32_t* first = nullptr;   // per live segment: its first sample this round
+    uint8_t* used = nullptr;     // per live segment: samples this round (<= k)
+    uint32_t* count = nullptr;   // device: samples this round (zero before the march)
+    float4* scratch = nullptr;   // k per live segment: the march's own slots before packing
+};
+
+// A segment in a list: its path's index and which of the path's queries it is (kind 0: the volume ray, with
+// emission; 1: the shadow ray, attenuation only) in the top bit.
+NPT_HD NPT_INLINE uint32_t segment_item(uint32_t path, int kind) { return path | (uint32_t(kind) << 31); }
+NPT_HD NPT_INLINE uint32_t segment_path(uint32_t item) { return item & 0x7fffffffu; }
+NPT_HD NPT_INLINE int segment_kind(uint32_t item) { return int(item >> 31); }
+
+// Lists of segments, one per model slot: list l is items[l * capacity ...], its length in counts[l] (zero
+// before). A wave's paths number below 2^31.
+struct SegmentLists {
+    uint32_t* items = nullptr;
+    uint32_t* counts = nullptr;
+    uint32_t capacity = 0;
+    uint32_t lists = 0;
+};
+
+// The paths of `active` (null: 0 .. n-1) that are not done go to `next`; their queued segments to the lists.
+void segment_gather(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next, uint32_t* next_count,
+                    const SegmentLists& lists, cudaStream_t s);
+// Starts the march of each of the n segments of `list`; a segment with nothing to march is written back at once
+// (no emission, T = 1), the others go to `live`.
+void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, uint32_t n,
+                   SegmentState* states, Vec3* dirs, uint32_t* live, uint32_t* live_count, cudaStream_t s);
+// Up to k samples for each of the n live segments.
+void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
+                   const SegmentSamples& samples, cudaStream_t s);
+// Composites the round's samples; finished segments are written into their paths, the others appended to next.
+void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,
+                       const uint32_t* live, uint32_t n, const SegmentSamples& samples, const float* sigma,
+                       const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s);
+
+}  // namespace npt::gpu

@@ -1,0 +1,194 @@
+#include "render/gpu/nerf_segments.h"
+
+#include <algorithm>
+#include <string>
+
+#include "nerf/cuda/adam_kernels.h"
+#include "nerf/cuda/fused_mlp.h"
+#include "nerf/cuda/hash_grid_kernels.h"
+#include "nerf/cuda/occupancy_bits.h"
+#include "render/gpu/nerf_segment_kernels.h"
+
+namespace npt::gpu {
+
+namespace {
+// Rounds as in the view renderer (cuda_renderer.cpp), samples per live segment doubling from round to round,
+// but the first round takes about k_round_samples samples in all: a long list starts with 8 per segment (few
+// evaluated past the point where a segment turns opaque), a short one (later bounces) with up to 128, so it
+// ends in a round or two instead of a handful of nearly empty ones, each with a synchronisation.
+constexpr int k_min_first_round = 8;
+constexpr int k_max_round = 128;  // SegmentSamples::used is 8 bits
+constexpr uint32_t k_round_samples = 1u << 22;
+// The sample buffers: 8 per path of a wave, between 4 and 16 million (about 120 bytes each).
+constexpr size_t k_min_samples = size_t(1) << 22, k_max_samples = size_t(1) << 24;
+
+int first_round(uint32_t segments) {
+    int k = k_min_first_round;
+    while (k < k_max_round && uint64_t(k) * segments < k_round_samples) k *= 2;
+    return k;
+}
+}  // namespace
+
+struct NerfSegmentPass::Buffers {
+    size_t paths = 0, segments = 0, samples = 0;
+    DeviceBuffer<uint32_t> lists, counts;  // counts: [0] next paths, [1] live a, [2] live b, [3] samples, lists...
+    DeviceBuffer<SegmentState> states;
+    DeviceBuffer<Vec3> dirs;
+    DeviceBuffer<uint32_t> live[2];
+    DeviceBuffer<Vec3> pos;
+    DeviceBuffer<float> dt, sigma;
+    DeviceBuffer<uint32_t> owner, first;
+    DeviceBuffer<uint8_t> used;
+    DeviceBuffer<float4> scratch;
+    DeviceBuffer<Rgb> rgb;
+    DeviceBuffer<__half> encoded;
+    std::vector<uint32_t> host_counts;
+};
+
+NerfSegmentPass::NerfSegmentPass(Span<const media::VolumeView> host, Span<const media::VolumeView> device,
+                                 size_t max_paths, cudaStream_t stream)
+    : m_stream(stream), m_buf(std::make_unique<Buffers>()) {
+    // The device views hold the device pointers of the models' parameters (DeviceVolumes).
+    std::vector<media::VolumeView> dev(device.size);
+    if (device.size)
+        cuda_check(cudaMemcpy(dev.data(), device.data, device.size * sizeof(media::VolumeView), cudaMemcpyDeviceToHost),
+                   "cudaMemcpy");
+    std::vector<uint32_t> slot_of(host.size, k_no_query);
+    m_bits.reserve(2 * host.size);
+    m_mlp_half.reserve(host.size);
+    for (size_t i = 0; i < host.size; ++i) {
+        const media::VolumeView& v = host[i];
+        if (v.kind != media::VolumeKind::Nerf) continue;
+        std::string why;
+        if (!nerf::cuda::mlp_shape_supported(v.nerf.field.layout, &why)) continue;  // integrated inline
+        NerfSegmentModel m;
+        m.layout = v.nerf.field.layout;
+        m.params = dev[i].nerf.field.params;
+        m_mlp_half.emplace_back(nerf::cuda::k_mlp_half_weights, "the NeRF's fp16 weights", "");
+        cuda_check(cudaMemsetAsync(m_mlp_half.back().data(), 0, m_mlp_half.back().bytes(), stream), "cudaMemsetAsync");
+        nerf::cuda::to_half(m.params, uint32_t(nerf::cuda::k_mlp_param_count), m_mlp_half.back().data(), stream);
+        m.mlp_half = m_mlp_half.back().data();
+        m.march = v.nerf.march;
+        const nerf::cuda::OccupancyBits bits = nerf::cuda::occupancy_bits(v.nerf.occupancy);
+        m_bits.emplace_back();
+        m_bits.back().upload(bits.occupied, "the occupancy grid", "");
+        m.grid = {nullptr, v.nerf.occupancy.cascades, v.nerf.occupancy.resolution, m_bits.back().data(), nullptr};
+        if (!bits.coarse.empty()) {
+            m_bits.emplace_back();
+            m_bits.back().upload(bits.coarse, "the occupancy grid", "");
+            m.grid.coarse_bits = m_bits.back().data();
+        }
+        m.box_min = bits.box_min;
+        m.box_max = bits.box_max;
+        m.density_scale = v.density_scale;
+        m.emission_scale = v.emission_scale;
+        slot_of[i] = uint32_t(m_models.size());
+        m_models.push_back(m);
+    }
+    m_slot_of_volume.upload(slot_of, "the volume table", "");
+
+    Buffers& b = *m_buf;
+    b.paths = std::max<size_t>(max_paths, 1);
+    b.segments = 2 * b.paths;  // a volume and a shadow segment per path at most
+    // At least one sample per segment, so that every live segment takes part in every round.
+    b.samples = std::max((b.segments + 127) / 128 * 128, std::clamp(8 * b.paths, k_min_samples, k_max_samples));
+    const size_t lists = m_models.size();
+    const char* lower = "--res or --spp";
+    b.lists.allocate(std::max<size_t>(lists, 1) * b.segments, "the NeRF segment lists", lower);
+    b.counts.allocate(4 + lists);
+    b.host_counts.resize(4 + lists);
+    b.states.allocate(b.segments, "the NeRF segments", lower);
+    b.dirs.allocate(b.segments, "the NeRF segments", lower);
+    b.live[0].allocate(b.segments, "the NeRF segments", lower);
+    b.live[1].allocate(b.segments, "the NeRF segments", lower);
+    b.first.allocate(b.segments, "the NeRF segments", lower);
+    b.used.allocate(b.segments, "the NeRF segments", lower);
+    b.pos.allocate(b.samples, "the NeRF samples", lower);
+    b.dt.allocate(b.samples, "the NeRF samples", lower);
+    b.sigma.allocate(b.samples, "the NeRF samples", lower);
+    b.owner.allocate(b.samples, "the NeRF samples", lower);
+    b.scratch.allocate(b.samples, "the NeRF samples", lower);
+    b.rgb.allocate(b.samples, "the NeRF samples", lower);
+    b.encoded.allocate(b.samples * nerf::cuda::k_mlp_inputs, "the NeRF samples", lower);
+    cuda_check(cudaStreamSynchronize(stream), "preparing the NeRF pass");
+}
+
+NerfSegmentPass::~NerfSegmentPass() = default;
+
+uint32_t NerfSegmentPass::read(const uint32_t* device_count) {
+    uint32_t v = 0;
+    cuda_check(cudaMemcpyAsync(&v, device_count, sizeof v, cudaMemcpyDeviceToHost, m_stream), "cudaMemcpyAsync");
+    cuda_check(cudaStreamSynchronize(m_stream), "the NeRF pass");
+    return v;
+}
+
+uint32_t NerfSegmentPass::run(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next) {
+    Buffers& b = *m_buf;
+    const uint32_t lists = uint32_t(m_models.size());
+    cuda_check(cudaMemsetAsync(b.counts.data(), 0, b.counts.bytes(), m_stream), "cudaMemsetAsync");
+    SegmentLists l{b.lists.data(), b.counts.data() + 4, uint32_t(b.segments), lists};
+    segment_gather(paths, active, n, next, b.counts.data(), l, m_stream);
+    cuda_check(cudaMemcpyAsync(b.host_counts.data(), b.counts.data(), b.counts.bytes(), cudaMemcpyDeviceToHost,
+                               m_stream),
+               "cudaMemcpyAsync");
+    cuda_check(cudaStreamSynchronize(m_stream), "the NeRF pass");
+    const std::vector<uint32_t> counts = b.host_counts;
+    for (uint32_t i = 0; i < lists; ++i)
+        if (counts[4 + i] > 0) evaluate(paths, i, counts[4 + i]);
+    return counts[0];
+}
+
+std::string NerfSegmentPass::stats() {
+    std::string s = std::to_string(m_segments) + " segments in " + std::to_string(m_rounds) + " rounds";
+    m_segments = m_rounds = 0;
+    return s;
+}
+
+void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
+    Buffers& b = *m_buf;
+    m_segments += n;
+    const NerfSegmentModel& m = m_models[model];
+    const uint32_t* list = b.lists.data() + model * b.segments;
+    uint32_t* live_count = b.counts.data() + 1;
+    uint32_t* sample_count = b.counts.data() + 3;
+    cuda_check(cudaMemsetAsync(live_count, 0, 2 * sizeof(uint32_t), m_stream), "cudaMemsetAsync");
+    segment_start(m, paths, list, n, b.states.data(), b.dirs.data(), b.live[0].data(), live_count, m_stream);
+    uint32_t live = read(live_count);
+    SegmentSamples samples{b.pos.data(), b.dt.data(), b.owner.data(), b.first.data(), b.used.data(), sample_count,
+                           b.scratch.data()};
+    const uint32_t capacity = uint32_t(b.samples);
+    int cur = 0;
+    for (int k = first_round(live); live > 0; k = std::min(2 * k, k_max_round)) {
+        ++m_rounds;
+        const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / live)));
+        cuda_check(cudaMemsetAsync(sample_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
+        segment_march(m, b.states.data(), b.live[cur].data(), live, kk, samples, m_stream);
+        nerf::cuda::HashGridArgs h;
+        h.layout = m.layout;
+        h.positions = b.pos.data();
+        h.count = sample_count;
+        h.capacity = capacity;
+        nerf::cuda::hash_encode(h, m.params + m.layout.grid_offset, b.encoded.data(), m_stream);
+        nerf::cuda::MlpInferenceArgs a;
+        a.weights = m.mlp_half;
+        a.encoded = b.encoded.data();
+        a.sample_ray = b.owner.data();
+        a.ray_dir = b.dirs.data();
+        a.count = sample_count;
+        a.capacity = capacity;
+        a.sigma = b.sigma.data();
+        a.rgb = b.rgb.data();
+        // With colour for every sample: the shadow segments' colour is not needed, but evaluating both kinds in
+        // the same rounds halves the rounds (and their synchronisations).
+        nerf::cuda::mlp_inference(a, false, m_stream);
+        const int nxt = 1 - cur;
+        uint32_t* next_count = b.counts.data() + 1 + nxt;
+        cuda_check(cudaMemsetAsync(next_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
+        segment_composite(m, paths, list, b.states.data(), b.live[cur].data(), live, samples, b.sigma.data(),
+                          b.rgb.data(), b.live[nxt].data(), next_count, m_stream);
+        live = read(next_count);
+        cur = nxt;
+    }
+}
+
+}  // namespace npt::gpu

@@ -1,0 +1,96 @@
+#include "render/gpu/optix_wavefront.h"
+
+#include <optix.h>
+#include <optix_stubs.h>
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <string>
+
+#include "core/error.h"
+
+#include "render/gpu/optix_context.h"
+#include "render/gpu/optix_pipeline.h"
+
+namespace npt::gpu {
+
+WavefrontLoop::Stream::Stream() { cuda_check(cudaStreamCreateWithFlags(&s, cudaStreamNonBlocking), "cudaStreamCreate"); }
+WavefrontLoop::Stream::~Stream() { cudaStreamDestroy(s); }
+
+WavefrontLoop::WavefrontLoop(Span<const media::VolumeView> host, Span<const media::VolumeView> device,
+                             size_t max_paths)
+    : m_stream(m_stream_owner.s), m_pass(host, device, max_paths, m_stream_owner.s) {
+    if (!m_pass.any()) return;
+    m_paths.allocate(max_paths, "the path states", "--res or --spp");
+    m_active[0].allocate(max_paths, "the path states", "--res or --spp");
+    m_active[1].allocate(max_paths, "the path states", "--res or --spp");
+}
+
+WavefrontLoop::~WavefrontLoop() = default;
+
+// Every wave gets the same number of stripes (the last ones may lie past the image).
+static uint32_t stripes_per_wave(size_t pixels, uint32_t wave_count) {
+    const size_t stripes = (pixels + k_wave_stripe - 1) / k_wave_stripe;
+    return uint32_t((stripes + wave_count - 1) / wave_count);
+}
+
+size_t WavefrontLoop::wave_paths(size_t pixels, uint32_t slots, uint32_t wave_count) {
+    return size_t(stripes_per_wave(pixels, wave_count)) * k_wave_stripe * slots;
+}
+
+void WavefrontLoop::run_wave(LaunchParams p, uint32_t slots, uint32_t wave_index, uint32_t wave_count,
+                             const OptixPrograms& programs) {
+    const size_t pixels = size_t(p.width) * size_t(p.height);
+    const uint32_t n = uint32_t(wave_paths(pixels, slots, wave_count));
+    if (n == 0) return;
+    if (n > m_paths.size()) throw Error("WavefrontLoop: a wave of " + std::to_string(n) + " paths, built for " +
+                                        std::to_string(m_paths.size()));
+    LaunchParams* params = m_params.data();
+    p.wave.paths = m_paths.data();
+    p.wave.nerf_slot = m_pass.nerf_slots();
+    p.wave.wave_index = wave_index;
+    p.wave.wave_count = wave_count;
+    p.wave.stripes = stripes_per_wave(pixels, wave_count);
+    p.sample_count = slots;
+    auto launch = [&](const uint32_t* active, uint32_t count) {
+        p.wave.active = active;
+        cuda_check(cudaMemcpyAsync(params, &p, sizeof p, cudaMemcpyHostToDevice, m_stream), "cudaMemcpyAsync");
+        // From pageable memory the copy is staged before the call returns, so p may change afterwards.
+        optix_check(optixLaunch(programs.pipeline(), m_stream, CUdeviceptr(params), sizeof(LaunchParams),
+                                &programs.sbt_wavefront(), count, 1, 1),
+                    "optixLaunch");
+    };
+    // NERFPT_WAVEFRONT_STATS=1: where a wave's time goes (launches vs the NeRF pass), for benchmarks; the extra
+    // synchronisation it needs costs a little time itself.
+    static const bool stats = std::getenv("NERFPT_WAVEFRONT_STATS") != nullptr;
+    using clock = std::chrono::steady_clock;
+    double launch_s = 0.0, pass_s = 0.0;
+    uint64_t launched = 0;
+    int launches = 0;
+    auto timed = [&](double& into, auto&& f) {
+        const auto t0 = clock::now();
+        f();
+        if (stats) {
+            cuda_check(cudaStreamSynchronize(m_stream), "rendering with OptiX");
+            into += std::chrono::duration<double>(clock::now() - t0).count();
+        }
+    };
+    uint32_t live = n;
+    const uint32_t* active = nullptr;
+    for (int cur = 0; live > 0; cur = 1 - cur) {
+        timed(launch_s, [&] { launch(active, live); });
+        launched += live;
+        ++launches;
+        uint32_t next = 0;
+        timed(pass_s, [&] { next = m_pass.run(m_paths.data(), active, live, m_active[cur].data()); });
+        active = m_active[cur].data();
+        live = next;
+    }
+    if (stats)
+        spdlog::info("wavefront: {} launches, {} path-vertices, OptiX {:.2f} ms, NeRF pass {:.2f} ms ({})", launches,
+                     launched, 1e3 * launch_s, 1e3 * pass_s, m_pass.stats());
+}
+
+}  // namespace npt::gpu

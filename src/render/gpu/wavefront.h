@@ -1,0 +1,119 @@
+// The wavefront form of the OptiX path tracer, for scenes with NeRF models (the design's "wavefront split"):
+// instead of each thread evaluating the network sample by sample inside the ray-generation program (divergent,
+// no tensor cores), a path stops wherever it needs a NeRF segment, leaves a NerfQuery in its state, and a
+// CUDA pass (nerf_segments.h) marches all waiting segments together and evaluates their samples with the
+// tensor-core MLP of `nerfpt view`. The path then goes on from where it stopped, with the same random numbers
+// in the same order as render/path_integrator.h's trace_path, which it is built from (path_scatter). Shared by
+// the OptiX programs, the CUDA pass and the host loop (optix_wavefront.cpp).
+#pragma once
+
+#include <cstdint>
+
+#include "core/sobol_sampler.h"
+#include "core/vec.h"
+#include "media/volume_integrator.h"
+#include "render/path_integrator.h"
+
+namespace npt::gpu {
+
+constexpr uint32_t k_no_query = 0xffffffffu;
+
+// A NeRF segment a path waits for: the model-space ray from the segment's start (unit direction), where the
+// segment ends along it (model units) and the step lattice's offset. `slot`: which of the pass's NeRFs
+// (NerfSegmentPass), k_no_query when nothing waits.
+struct NerfQuery {
+    Ray ray;
+    float t_max = 0.0f;
+    float xi = 0.0f;
+    uint32_t slot = k_no_query;
+};
+
+enum class PathPhase : uint8_t {
+    Scatter,  // the segment in front of `hit` is known (or queued): path_scatter next
+    Finish,   // ended, but a shadow ray's transmittance is still queued
+    Done,     // written to the image
+};
+
+struct WavefrontPath {
+    render::PathState st;
+    SobolSampler sampler;
+    Ray ray;  // the ray that found `hit`
+    render::Hit hit;
+    media::VolumeResult vol;  // the volumes on [0, hit) of `ray`: set inline or by the NeRF pass
+    Rgb shadow_contribution{0.0f};
+    float shadow_t = 1.0f;  // the shadow ray's transmittance: set inline or by the NeRF pass
+    NerfQuery query[2];     // [0] the volume ray (emission and attenuation), [1] the shadow ray (attenuation)
+    uint32_t pixel = 0;     // y * width + x
+    uint32_t slot = 0;      // the sample slot (accumulation plane) it adds to
+    bool found = false;
+    bool shadow_pending = false;
+    PathPhase phase = PathPhase::Done;
+};
+
+// Which volumes the NeRF pass takes: per scene volume, its slot in the pass, or k_no_query (grids, and NeRFs
+// the pass cannot evaluate; these are integrated inline).
+struct WavefrontParams {
+    WavefrontPath* paths = nullptr;
+    const uint32_t* active = nullptr;  // the paths of this launch; null in the first launch of a wave
+    const uint32_t* nerf_slot = nullptr;  // per scene volume
+    // The wave's pixels: several waves run side by side (optix_wavefront.h), wave k of n taking every n-th run
+    // of k_wave_stripe pixels from the k-th, so that each has its share of every part of the image. `stripes`:
+    // the runs of this wave (a path of a new wave is pixel-in-wave + stripes * k_wave_stripe * slot).
+    uint32_t wave_index = 0, wave_count = 1, stripes = 0;
+};
+
+constexpr uint32_t k_wave_stripe = 32;  // a warp's pixels
+
+// The pixel of a wave's local index (WavefrontParams), past the image's last pixel for a last stripe's tail.
+NPT_HD NPT_INLINE uint32_t wave_pixel(const WavefrontParams& w, uint32_t local) {
+    return ((local / k_wave_stripe) * w.wave_count + w.wave_index) * k_wave_stripe + local % k_wave_stripe;
+}
+
+// The volumes of `volumes` on [t_begin, t_end] of `ray`: when exactly one volume lies there and it is a NeRF the
+// pass evaluates, the segment is left in *q for the pass (true); otherwise it is integrated here into *vol
+// (false), exactly as trace_path does. `shadow`: attenuation only, volumes that cast shadows only.
+NPT_HD NPT_INLINE bool volume_segment(Span<const media::VolumeView> volumes, const uint32_t* nerf_slot,
+                                      const Ray& ray, float t_begin, float t_end, float xi, bool shadow,
+                                      NerfQuery* q, media::VolumeResult* vol) {
+    int count = 0;
+    size_t only = 0;
+    float t0 = 0.0f, t1 = 0.0f;
+    for (size_t i = 0; i < volumes.size && count < 2; ++i) {
+        const media::VolumeView& v = volumes[i];
+        if (shadow && !v.casts_shadows) continue;
+        const Vec3 lo = v.world_to_local.apply(ray.o), ld = v.world_to_local.apply_vector(ray.d);
+        float a, b;
+        if (!media::intersect_box(lo, ld, v.local_min, v.local_max, t_begin, t_end, &a, &b)) continue;
+        ++count;
+        only = i;
+        t0 = a;
+        t1 = b;
+    }
+    q->slot = k_no_query;
+    if (count == 0) {
+        *vol = media::VolumeResult{};
+        return false;
+    }
+    if (count == 1 && volumes[only].kind == media::VolumeKind::Nerf && nerf_slot[only] != k_no_query) {
+        // march_nerf's model-space ray (volume_integrator.h), handed over instead of marched here.
+        const media::VolumeView& v = volumes[only];
+        const media::NerfVolumeView& n = v.nerf;
+        const Vec3 lo = v.world_to_local.apply(ray.o), ld = v.world_to_local.apply_vector(ray.d);
+        const Vec3 om = n.local_to_model.point(lo), dm = n.local_to_model.vector(ld);
+        const float len = length(dm);
+        if (!(len > 0.0f) || !isfinite(len)) {
+            *vol = media::VolumeResult{};
+            return false;
+        }
+        const Vec3 dir = dm / len;
+        q->ray = Ray{om + dir * (t0 * len), dir};
+        q->t_max = (t1 - t0) * len;
+        q->xi = xi;
+        q->slot = nerf_slot[only];
+        return true;
+    }
+    *vol = media::integrate_volumes(volumes, ray, t_begin, t_end, xi, shadow);
+    return false;
+}
+
+}  // namespace npt::gpu

@@ -1,0 +1,315 @@
+"""Unit tests of the add-on's modules that need no Blender (plain python3): reading nerfpt's output, the
+child process and its cancel, the model file header and placement, the glTF additions, the main-thread queue.
+
+python3 tests/blender/test_pure.py BUILD_DIR   (BUILD_DIR/nerfpt is used where a real binary is needed)
+"""
+
+import json
+import os
+import stat
+import struct
+import sys
+import tempfile
+import threading
+import time
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "blender"))
+from nerfpt_blender import child_process, gltf_post, main_thread, model_file, nerfpt_cli  # noqa: E402
+
+BUILD = os.path.abspath(sys.argv.pop(1)) if len(sys.argv) > 1 else ""
+
+
+def write(path, data):
+    with open(path, "wb") as f:
+        f.write(data)
+
+
+def script(folder, name, body):
+    p = os.path.join(folder, name)
+    with open(p, "w") as f:
+        f.write("#!/bin/sh\n" + body + "\n")
+    os.chmod(p, os.stat(p).st_mode | stat.S_IXUSR)
+    return p
+
+
+class CliOutput(unittest.TestCase):
+    def test_version(self):
+        self.assertEqual(nerfpt_cli.parse_version("nerfpt 0.1.0\n"), (0, 1, 0))
+        self.assertEqual(nerfpt_cli.parse_version("nerfpt 12.3.45-dirty"), (12, 3, 45))
+        self.assertIsNone(nerfpt_cli.parse_version("blender 3.4.1"))
+        self.assertIsNone(nerfpt_cli.parse_version(""))
+
+    def test_progress_and_messages(self):
+        self.assertEqual(nerfpt_cli.progress_fraction("render: 40% (1.2M samples/s, ETA 3.0 s)"), 0.4)
+        self.assertEqual(nerfpt_cli.progress_fraction("bake: 100% (2.0M voxels/s, 1.0 s)"), 1.0)
+        self.assertIsNone(nerfpt_cli.progress_fraction("nerfpt: info: rendering 80x60"))
+        self.assertEqual(
+            nerfpt_cli.error_message("nerfpt: error: m.npt: file not found"), "m.npt: file not found"
+        )
+        self.assertEqual(nerfpt_cli.warning_message("nerfpt: warning: x"), "x")
+        self.assertIsNone(nerfpt_cli.error_message("render: 10%"))
+
+    def test_failure_message(self):
+        lines = ["render: 10% (...)", "nerfpt: error: scene.gltf: bad", "render: 20% (...)"]
+        self.assertEqual(nerfpt_cli.failure_message(lines, 1), "scene.gltf: bad")
+        self.assertEqual(
+            nerfpt_cli.failure_message(["render: 10% (x)", "Segmentation fault"], 139), "Segmentation fault"
+        )
+        self.assertEqual(nerfpt_cli.failure_message([], -9), "nerfpt was killed by signal 9")
+        self.assertEqual(nerfpt_cli.failure_message([], 3), "nerfpt exited with code 3")
+
+    def test_ignored_report_lists_each_thing_once(self):
+        self.assertIsNone(nerfpt_cli.ignored_report([], []))
+        gltf = "/tmp/nerfpt-render-x/scene.gltf"
+        report = nerfpt_cli.ignored_report(
+            ["area light 'a' is not exported", "motion blur is ignored", "area light 'a' is not exported"],
+            [f"{gltf}: mesh 'edges': primitive mode 1 is not TRIANGLES", f"{gltf}: mesh 'edges': primitive mode 1 "
+             "is not TRIANGLES", "motion blur is ignored"],
+            gltf,
+        )
+        self.assertEqual(
+            report,
+            "nerfpt ignores: area light 'a' is not exported; motion blur is ignored; nerfpt: scene: mesh 'edges': "
+            "primitive mode 1 is not TRIANGLES; nerfpt: motion blur is ignored",
+        )
+        self.assertEqual(nerfpt_cli.ignored_report(["x"]), "nerfpt ignores: x")
+
+    def test_find_and_check_binary(self):
+        with tempfile.TemporaryDirectory() as d:
+            with self.assertRaisesRegex(nerfpt_cli.NerfptError, "does not exist"):
+                nerfpt_cli.find_binary(os.path.join(d, "nope"))
+            old = script(d, "old", "echo 'nerfpt 0.0.1'")
+            self.assertEqual(nerfpt_cli.find_binary(old), old)
+            with self.assertRaisesRegex(nerfpt_cli.NerfptError, "too old"):
+                nerfpt_cli.check_version(old)
+            slow = script(d, "slow", "sleep 5")
+            with self.assertRaisesRegex(nerfpt_cli.NerfptError, "did not answer"):
+                nerfpt_cli.check_version(slow, timeout=0.5)
+            build = os.path.join(d, "build")
+            os.mkdir(build)
+            fake = script(build, "nerfpt", "echo 'nerfpt 9.9.9'")
+            saved = os.environ["PATH"]
+            os.environ["PATH"] = "/nonexistent"
+            try:
+                self.assertEqual(nerfpt_cli.find_binary("", [build]), fake)
+                with self.assertRaisesRegex(nerfpt_cli.NerfptError, "not found .*PATH"):
+                    nerfpt_cli.find_binary("", [d])
+            finally:
+                os.environ["PATH"] = saved
+            self.assertEqual(nerfpt_cli.check_version(fake), (9, 9, 9))
+
+    @unittest.skipUnless(BUILD and os.path.isfile(os.path.join(BUILD, "nerfpt")), "no built nerfpt")
+    def test_real_binary(self):
+        self.assertGreaterEqual(
+            nerfpt_cli.check_version(os.path.join(BUILD, "nerfpt")), nerfpt_cli.MIN_VERSION
+        )
+
+
+class Child(unittest.TestCase):
+    def test_lines_progress_and_exit_code(self):
+        cmd = ["sh", "-c", "echo out1; echo 'render: 50% (x)' >&2; echo 'nerfpt: warning: w' >&2; "
+               "echo 'nerfpt: error: it broke' >&2; exit 1"]  # fmt: skip
+        seen = []
+        child = child_process.run(cmd, on_line=lambda c, s, line: seen.append((s, line)))
+        self.assertEqual(child.returncode, 1)
+        self.assertFalse(child.cancelled)
+        self.assertEqual(child.progress, 0.5)
+        self.assertEqual(child.stdout_lines, ["out1"])
+        self.assertEqual(child.failure(), "it broke")
+        self.assertEqual(child.warnings(), ["w"])
+        self.assertIn(("out", "out1"), seen)
+
+    def test_cancel_stops_at_once(self):
+        t0 = time.time()
+        child = child_process.run(["sleep", "30"], should_cancel=lambda c: time.time() - t0 > 0.3)
+        self.assertTrue(child.cancelled)
+        self.assertLess(time.time() - t0, 5)
+        self.assertFalse(child_process.process_exists(child.pid))
+
+    def test_cancel_kills_what_ignores_sigterm(self):
+        t0 = time.time()
+        ignores = "import signal, time; signal.signal(signal.SIGTERM, signal.SIG_IGN); time.sleep(30)"
+        with child_process.ChildProcess([sys.executable, "-c", ignores]) as child:
+            time.sleep(0.2)
+            child.cancel(grace_s=0.5)
+        self.assertTrue(child.cancelled)
+        self.assertLess(time.time() - t0, 5)
+        self.assertFalse(child_process.process_exists(child.pid))
+
+    def test_missing_program(self):
+        with self.assertRaisesRegex(nerfpt_cli.NerfptError, "cannot start"):
+            child_process.ChildProcess(["/nonexistent/nerfpt"])
+
+
+def write_model(path, aabb_scale, scale, offset, extra_sections=()):
+    """A minimal file with the sections placement() reads (the rest of a real model is not needed)."""
+    m = [
+        0,
+        scale,
+        0,
+        offset[1],
+        0,
+        0,
+        scale,
+        offset[2],
+        scale,
+        0,
+        0,
+        offset[0],
+        0,
+        0,
+        0,
+        1,
+    ]  # ngp_world_to_model
+    body = b""
+    for tag, payload in (*extra_sections, (b"SCEN", struct.pack("<f16d", aabb_scale, *m))):
+        body += tag + struct.pack("<Q", len(payload)) + payload
+    with open(path, "wb") as f:
+        f.write(b"NPTNERF1" + struct.pack("<I", 1) + body)
+
+
+class ModelFile(unittest.TestCase):
+    def test_placement(self):
+        with tempfile.TemporaryDirectory() as d:
+            p = os.path.join(d, "m.npt")
+            write_model(p, 1.0, 0.33, (0.5, 0.5, 0.5), [(b"CONF", b"{}" * 1000)])
+            place = model_file.placement(p)
+            for a in range(3):
+                self.assertAlmostEqual(place["centre"][a], 0.0, places=6)
+                self.assertAlmostEqual(place["half_size"][a], 0.5 / 0.33, places=5)
+            # Model x, y, z = world y, z, x: a crop longer along model z is longer along world x.
+            place = model_file.placement(p, ((0.4, 0.4, 0.2), (0.6, 0.6, 0.8)))
+            self.assertAlmostEqual(place["half_size"][0], 0.3 / 0.33, places=5)
+            self.assertAlmostEqual(place["half_size"][1], 0.1 / 0.33, places=5)
+            self.assertAlmostEqual(place["centre"][0], 0.0, places=6)
+            write_model(p, 4.0, 0.25, (0.5, 0.5, 0.5))
+            self.assertAlmostEqual(model_file.placement(p)["half_size"][2], 2.0 / 0.25, places=5)
+
+    def test_bad_files(self):
+        with tempfile.TemporaryDirectory() as d:
+            p = os.path.join(d, "m.npt")
+            with self.assertRaisesRegex(model_file.ModelFileError, "cannot open"):
+                model_file.read_scene_section(p)
+            write(p, b"hello")
+            with self.assertRaisesRegex(model_file.ModelFileError, "not a nerfpt model"):
+                model_file.read_scene_section(p)
+            write(p, b"NPTNERF1" + struct.pack("<I", 7))
+            with self.assertRaisesRegex(model_file.ModelFileError, "version 7"):
+                model_file.read_scene_section(p)
+            write(p, b"NPTNERF1" + struct.pack("<I", 1) + b"CONF" + struct.pack("<Q", 2) + b"{}")
+            with self.assertRaisesRegex(model_file.ModelFileError, "missing section 'SCEN'"):
+                model_file.read_scene_section(p)
+            write(p, b"NPTNERF1" + struct.pack("<I", 1) + b"SCEN" + struct.pack("<Q", 132) + b"\0" * 10)
+            with self.assertRaisesRegex(model_file.ModelFileError, "truncated"):
+                model_file.read_scene_section(p)
+            write_model(p, 1.0, 0.33, (0.5, 0.5, 0.5))
+            with self.assertRaisesRegex(model_file.ModelFileError, "inside the model's box"):
+                model_file.placement(p, ((-0.5, 0, 0), (1, 1, 1)))
+            with self.assertRaisesRegex(model_file.ModelFileError, "minimum must be below"):
+                model_file.placement(p, ((0.5, 0, 0), (0.5, 1, 1)))
+
+    @unittest.skipUnless(
+        BUILD and os.path.isfile(os.path.join(BUILD, "blender_tests", "model", "spheres.npt")), "no model"
+    )
+    def test_real_model(self):
+        place = model_file.placement(os.path.join(BUILD, "blender_tests", "model", "spheres.npt"))
+        self.assertAlmostEqual(place["half_size"][0], 0.5 / 0.33, places=5)
+
+
+class Gltf(unittest.TestCase):
+    def test_volume_cube(self):
+        g = {"scenes": [{"nodes": [0]}], "nodes": [{"name": "floor"}], "materials": [{"name": "white"}]}
+        world = [[2, 0, 0, 1], [0, 2, 0, 2], [0, 0, 2, 3], [0, 0, 0, 1]]
+        cube = {"name": "cap", "matrix": gltf_post.gltf_node_matrix(world), "min": [-1, -1, -1], "max": [1, 1, 1],
+                "extras": {"volume": {"file": "m.npt"}}}  # fmt: skip
+        data = gltf_post.add_volume_cubes(g, [cube, dict(cube, name="cap2")], "v.bin")
+        self.assertEqual(len(data), g["buffers"][0]["byteLength"])
+        self.assertEqual(g["scenes"][0]["nodes"], [0, 1, 2])
+        self.assertEqual(g["materials"][1]["name"], "volume")
+        node = g["nodes"][1]
+        # Column major; Blender (x, y, z) -> glTF (x, z, -y): translation (1, 3, -2), local y -> glTF -z.
+        self.assertEqual(node["matrix"][12:15], [1.0, 3.0, -2.0])
+        self.assertEqual(node["matrix"][4:7], [0.0, 0.0, -2.0])
+        prim = g["meshes"][node["mesh"]]["primitives"][0]
+        self.assertEqual(prim["material"], 1)
+        pos = g["accessors"][prim["attributes"]["POSITION"]]
+        view = g["bufferViews"][pos["bufferView"]]
+        corners = struct.unpack_from("<24f", data, view["byteOffset"])
+        self.assertEqual(min(corners), -1.0)
+        self.assertEqual(pos["min"], [-1.0, -1.0, -1.0])
+        idx = g["accessors"][prim["indices"]]
+        iview = g["bufferViews"][idx["bufferView"]]
+        tris = struct.unpack_from("<36H", data, iview["byteOffset"])
+        self.assertEqual(sorted(set(tris)), list(range(8)))
+        self.assertEqual(iview["byteOffset"] % 2, 0)
+        self.assertEqual(
+            g["bufferViews"][
+                g["accessors"][g["meshes"][1]["primitives"][0]["attributes"]["POSITION"]]["bufferView"]
+            ]["byteOffset"]
+            % 4,
+            0,
+        )
+        json.dumps(g)  # serialisable
+        self.assertEqual(gltf_post.add_volume_cubes({}, [], "x.bin"), b"")
+
+    def test_materials_and_extras(self):
+        g = {
+            "scenes": [{"nodes": []}],
+            "materials": [{"name": "m", "doubleSided": True, "pbrMetallicRoughness": {}}],
+        }
+        gltf_post.replace_material(g, 0, gltf_post.lambert([0.5, 0.25, 0.125, 1.0]))
+        m = g["materials"][0]
+        self.assertEqual(m["name"], "m")
+        self.assertTrue(m["doubleSided"])
+        self.assertEqual(m["pbrMetallicRoughness"]["metallicFactor"], 0.0)
+        self.assertEqual(m["extensions"]["KHR_materials_specular"]["specularFactor"], 0.0)
+        self.assertIn("KHR_materials_specular", g["extensionsUsed"])
+        e = gltf_post.emitter([2.0, 1.0, 0.0], 5.0)
+        self.assertEqual(e["emissiveFactor"], [1.0, 0.5, 0.0])
+        self.assertEqual(e["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"], 10.0)
+        principled = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [0.0, 0.0, 0.0]}}}
+        gltf_post.no_specular_when_black(principled)
+        self.assertEqual(principled["extensions"]["KHR_materials_specular"]["specularFactor"], 0.0)
+        tinted = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [1.2, 1.2, 1.2]}}}
+        gltf_post.no_specular_when_black(tinted)
+        self.assertNotIn("specularFactor", tinted["extensions"]["KHR_materials_specular"])
+        gltf_post.set_scene_extras(g, width=8, spp=4)
+        self.assertEqual(g["scenes"][0]["extras"], {"width": 8, "spp": 4})
+
+
+class MainThread(unittest.TestCase):
+    def test_call_from_another_thread(self):
+        results = {}
+
+        def worker():
+            results["value"] = main_thread.call(lambda: threading.current_thread() is threading.main_thread())
+            try:
+                main_thread.call(lambda: 1 / 0)
+            except ZeroDivisionError:
+                results["raised"] = True
+
+        t = threading.Thread(target=worker)
+        t.start()
+        while t.is_alive():
+            main_thread.drain()  # what the timer does
+            time.sleep(0.01)
+        self.assertEqual(results, {"value": True, "raised": True})
+
+    def test_main_thread_calls_directly(self):
+        self.assertEqual(main_thread.call(lambda: 42), 42)
+
+    def test_cancel_before_start(self):
+        results = {}
+        t = threading.Thread(
+            target=lambda: results.setdefault("r", main_thread.call(lambda: 1, should_cancel=lambda: True))
+        )
+        t.start()
+        t.join(5)
+        self.assertFalse(t.is_alive())
+        self.assertIsNone(results["r"])
+        main_thread.drain()  # the abandoned task is dropped, not run
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
