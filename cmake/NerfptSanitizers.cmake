@@ -20,3 +20,11 @@ if(NERFPT_SANITIZE)
     add_compile_options("$<$<COMPILE_LANGUAGE:CXX>:${_nerfpt_san}>")
     add_link_options(-fsanitize=address,undefined)
 endif()
+
+# Executables of the sanitizer build get an operator new that throws std::bad_alloc on failure, as the standard
+# and a normal build do (ASan's aborts: see cmake/sanitizer_new.cpp); a no-op in other builds.
+function(nerfpt_conforming_new target)
+    if(NERFPT_SANITIZE)
+        target_sources(${target} PRIVATE ${PROJECT_SOURCE_DIR}/cmake/sanitizer_new.cpp)
+    endif()
+endfunction()

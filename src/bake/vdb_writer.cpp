@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "bake/grid_writers.h"
+#include "bake/nanovdb_convert.h"
 #include "core/error.h"
 #include "core/srgb.h"
 #include "core/temp_file.h"
@@ -100,6 +101,22 @@ void write_nvdb(const std::filesystem::path& path, const BakedGrid& grid) {
         rethrow(path, e);
     }
     tmp.commit();
+}
+
+void write_nanovdb_grids(const std::filesystem::path& path, const openvdb::GridPtrVec& grids, bool full_checksum) {
+    const auto checksum = full_checksum ? nanovdb::ChecksumMode::Full : nanovdb::ChecksumMode::Default;
+    std::vector<nanovdb::GridHandle<>> handles;
+    for (const auto& g : grids) {
+        // The typed overloads: NanoVDB's GridBase::Ptr one instantiates the converter for every grid type.
+        if (const auto f = openvdb::gridConstPtrCast<openvdb::FloatGrid>(g))
+            handles.push_back(nanovdb::openToNanoVDB(*f, nanovdb::StatsMode::Default, checksum));
+        else if (const auto v = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(g))
+            handles.push_back(nanovdb::openToNanoVDB(*v, nanovdb::StatsMode::Default, checksum));
+        else
+            throw Error(path.string() + ": grid '" + g->getName() + "' is a " + g->valueType() +
+                        " grid; only float and vec3s grids are converted");
+    }
+    nanovdb::io::writeGrids(path.string(), handles);
 }
 
 }  // namespace npt::bake

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "media/nanovdb_layout.h"
 
 namespace npt::media {
 namespace {
@@ -94,12 +95,13 @@ void for_each_voxel(const nanovdb::Coord& lo, const nanovdb::Coord& hi, Fn&& fn)
 
 }  // namespace
 
-VolumeGrid read_nanovdb_grid(const std::filesystem::path& path) {
+VolumeGrid read_nanovdb_grid(const std::filesystem::path& path, size_t max_voxels) {
     const std::string where = path.string();
     try {
         std::error_code ec;
         const uintmax_t file_size = std::filesystem::file_size(path, ec);
         if (ec) throw Error(where + ": cannot read: " + ec.message());
+        check_nanovdb_layout(where);
         const auto metas = nanovdb::io::readGridMetaData(where);
         const nanovdb::io::GridMetaData* dmeta = nullptr;
         const nanovdb::io::GridMetaData* cmeta = nullptr;
@@ -124,11 +126,12 @@ VolumeGrid read_nanovdb_grid(const std::filesystem::path& path) {
         const nanovdb::Coord lo = bbox.min(), hi = bbox.max();
         const size_t nx = size_t(int64_t(hi[0]) - lo[0] + 1), ny = size_t(int64_t(hi[1]) - lo[1] + 1),
                      nz = size_t(int64_t(hi[2]) - lo[2] + 1);
-        const size_t n = nx * ny * nz;  // each < 2^33: no overflow
-        if (n > k_max_dense_voxels)
+        // Each is at most 2^32: the product is compared in double (in size_t it wrapped to a small number).
+        if (double(nx) * double(ny) * double(nz) > double(max_voxels))
             throw Error(where + ": grid 'density': active bounding box " + std::to_string(nx) + "x" +
                         std::to_string(ny) + "x" + std::to_string(nz) + " is over the dense limit of " +
-                        std::to_string(k_max_dense_voxels) + " voxels");
+                        std::to_string(max_voxels) + " voxels");
+        const size_t n = nx * ny * nz;
 
         VolumeGrid g;
         g.source = where;

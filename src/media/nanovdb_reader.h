@@ -10,6 +10,7 @@ namespace npt::media {
 
 // Values are returned as stored (load_volume_grid clamps them). Throws npt::Error naming the file and the
 // grid.
-VolumeGrid read_nanovdb_grid(const std::filesystem::path& path);
+// A density box over max_voxels is an error.
+VolumeGrid read_nanovdb_grid(const std::filesystem::path& path, size_t max_voxels = k_max_dense_voxels);
 
 }  // namespace npt::media

@@ -1,107 +1,95 @@
 #include "media/openvdb_layout.h"
 
-#include <cstdint>
-#include <fstream>
+#include <openvdb/version.h>
 
-#include "core/error.h"
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "media/openvdb_grid_check.h"
+#include "media/vdb_byte_reader.h"
 
 namespace npt::media {
 namespace {
 
 constexpr int64_t k_openvdb_magic = 0x56444220;  // OPENVDB_MAGIC (" BDV")
+// Node-mask compression and per-grid compression flags (OpenVDB 3, 2015) up to the version of the OpenVDB we
+// link (224 in OpenVDB 10): the layouts openvdb_grid_check.cpp walks. A newer layout is not guessed at.
+constexpr uint32_t k_oldest_version = openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION,
+                   k_newest_version = openvdb::OPENVDB_FILE_VERSION;
 
-// Little-endian reads that know how many bytes are left (OpenVDB writes native order; every platform it runs
-// on is little-endian).
-class LayoutReader {
-  public:
-    explicit LayoutReader(const std::string& where) : m_where(where), m_in(where, std::ios::binary) {
-        m_in.seekg(0, std::ios::end);
-        const auto end = m_in.tellg();
-        m_size = end > 0 ? uint64_t(end) : 0;
-        m_in.seekg(0);
-    }
-    uint64_t size() const { return m_size; }
-    uint64_t pos() const { return m_pos; }
-    bool ok() const { return bool(m_in); }
-
-    void need(uint64_t n, const std::string& what) const {
-        if (n > m_size - m_pos)
-            throw Error(m_where + ": cannot read OpenVDB file: cut short: " + what + " needs " +
-                        std::to_string(n) + " bytes at byte " + std::to_string(m_pos) + ", the file has " +
-                        std::to_string(m_size));
-    }
-    template <typename T>
-    T read(const std::string& what) {
-        need(sizeof(T), what);
-        T v;
-        m_in.read(reinterpret_cast<char*>(&v), sizeof(T));
-        m_pos += sizeof(T);
-        return v;
-    }
-    void skip(uint64_t n, const std::string& what) {
-        need(n, what);
-        seek(m_pos + n);
-    }
-    void seek(uint64_t to) {
-        m_pos = to;
-        m_in.seekg(std::streamoff(to));
-    }
-    // OpenVDB's readString: a uint32 length, then the bytes.
-    std::string string(const std::string& what) {
-        const uint32_t n = read<uint32_t>(what);
-        need(n, what);
-        std::string s(n, '\0');
-        m_in.read(s.data(), n);
-        m_pos += n;
-        return s;
-    }
-
-  private:
-    std::string m_where;
-    std::ifstream m_in;
-    uint64_t m_size = 0, m_pos = 0;
-};
+// "Tree_vec3s_5_4_3" -> "vec3s", as OpenVDB's valueType() names it.
+std::string value_type_of(const std::string& tree_type) {
+    const size_t a = tree_type.find('_'), b = tree_type.find('_', a + 1);
+    return a == std::string::npos ? tree_type : tree_type.substr(a + 1, b - a - 1);
+}
 
 }  // namespace
 
 void check_openvdb_layout(const std::string& where) {
-    LayoutReader r(where);
+    VdbByteReader r(where);
     if (!r.ok() || r.size() < 12) return;  // OpenVDB says "not a VDB file" or "could not open"
     if (r.read<int64_t>("magic") != k_openvdb_magic) return;
     const uint32_t version = r.read<uint32_t>("file version");
-    if (version < 218) return;  // older headers differ; OpenVDB reads them
+    if (version < k_oldest_version)
+        r.fail("file format version " + std::to_string(version) +
+               " (before OpenVDB 3, 2015) is not supported: save it again with a current OpenVDB");
+    if (version > k_newest_version)
+        r.fail("file format version " + std::to_string(version) + " is newer than this reader knows (" +
+               std::to_string(k_newest_version) + ")");
     r.skip(8, "library version");
-    const bool has_offsets = r.read<char>("header") != 0;
-    if (version >= 220 && version < 222) r.skip(1, "header");  // per-file compression flag
+    if (r.read<char>("header") == 0)
+        r.fail("written as a stream without grid offsets: not supported (write it with openvdb::io::File)");
     r.skip(36, "file UUID");
+    skip_openvdb_metadata(r, "file metadata");
 
-    const uint32_t meta_count = r.read<uint32_t>("file metadata count");
-    for (uint32_t i = 0; i < meta_count; ++i) {
-        const std::string what = "file metadata " + std::to_string(i);
-        r.string(what + " name");
-        r.string(what + " type");
-        r.skip(r.read<uint32_t>(what + " size"), what + " value");
-    }
-    if (!has_offsets) return;  // a stream written without a seekable target: OpenVDB reads it in one pass
-
+    // The grids the reader asks OpenVDB for, walked through once every descriptor is known (density first; a
+    // name used twice: each of them).
+    struct Wanted {
+        VdbGridInfo info;
+        std::string type, parent;
+    };
+    std::vector<Wanted> wanted;
     const int32_t grids = r.read<int32_t>("grid count");
-    if (grids < 0) throw Error(where + ": cannot read OpenVDB file: grid count " + std::to_string(grids));
+    if (grids < 0) r.fail("grid count " + std::to_string(grids));
     for (int32_t i = 0; i < grids; ++i) {
         const std::string what = "grid descriptor " + std::to_string(i);
-        const std::string name = r.string(what + " name");
-        r.string("grid '" + name + "' type");
-        r.string("grid '" + name + "' instance parent");
+        const std::string unique = r.string(what + " name");
+        const std::string name = unique.substr(0, unique.find('\x1e'));  // OpenVDB's "name[N]" separator
+        std::string type = r.string("grid '" + name + "' type");
+        const std::string parent = r.string("grid '" + name + "' instance parent");
         const int64_t grid_pos = r.read<int64_t>("grid '" + name + "' offsets");
         const int64_t block_pos = r.read<int64_t>("grid '" + name + "' offsets");
         const int64_t end_pos = r.read<int64_t>("grid '" + name + "' offsets");
         if (grid_pos < int64_t(r.pos()) || block_pos < grid_pos || end_pos < block_pos)
-            throw Error(where + ": cannot read OpenVDB file: grid '" + name + "': offsets " +
-                        std::to_string(grid_pos) + ", " + std::to_string(block_pos) + ", " +
-                        std::to_string(end_pos) + " are out of order");
+            r.fail("grid '" + name + "': offsets " + std::to_string(grid_pos) + ", " +
+                   std::to_string(block_pos) + ", " + std::to_string(end_pos) + " are out of order");
         if (uint64_t(end_pos) > r.size())
-            throw Error(where + ": cannot read OpenVDB file: cut short: grid '" + name + "' ends at byte " +
-                        std::to_string(end_pos) + ", the file has " + std::to_string(r.size()));
-        r.seek(uint64_t(end_pos));
+            r.fail("cut short: grid '" + name + "' ends at byte " + std::to_string(end_pos) +
+                   ", the file has " + std::to_string(r.size()));
+        const uint64_t next = uint64_t(end_pos);
+
+        if (name == "density" || name == "color") {
+            Wanted w{VdbGridInfo{name, version, 0, false, uint64_t(grid_pos), next}, type, parent};
+            wanted.insert(name == "density" ? wanted.begin() : wanted.end(), w);
+        }
+        r.seek(next);
+    }
+    for (Wanted& w : wanted) {
+        VdbGridInfo& g = w.info;
+        const std::string half_suffix = "_HalfFloat";
+        g.half = w.type.size() > half_suffix.size() &&
+                 w.type.compare(w.type.size() - half_suffix.size(), half_suffix.size(), half_suffix) == 0;
+        if (g.half) w.type.resize(w.type.size() - half_suffix.size());
+        const std::string expected = g.name == "density" ? "float" : "vec3s";
+        if (w.type != "Tree_" + expected + "_5_4_3")
+            r.fail("grid '" + g.name + "' is a " + value_type_of(w.type) + " grid (" + w.type +
+                   "), expected " + expected + " (Tree_" + expected + "_5_4_3)");
+        if (!w.parent.empty())
+            r.fail("grid '" + g.name + "' is an instance of grid '" + w.parent +
+                   "' (shared trees are not supported)");
+        g.value_size = g.name == "density" ? 4 : 12;
+        check_openvdb_grid(r, g);
     }
 }
 

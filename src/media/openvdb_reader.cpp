@@ -4,11 +4,14 @@
 #include <openvdb/tools/Interpolation.h>
 #include <spdlog/spdlog.h>
 
+#include <cstdint>
 #include <exception>
+#include <new>
 #include <string>
 #include <vector>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "media/openvdb_layout.h"
 
 namespace npt::media {
@@ -75,7 +78,7 @@ Vec3 to_vec3(const openvdb::Vec3s& v) { return Vec3(v[0], v[1], v[2]); }
 
 }  // namespace
 
-VolumeGrid read_openvdb_grid(const std::filesystem::path& path) {
+VolumeGrid read_openvdb_grid(const std::filesystem::path& path, size_t max_voxels) {
     ensure_openvdb_initialized();
     const std::string where = path.string();
     try {
@@ -96,12 +99,15 @@ VolumeGrid read_openvdb_grid(const std::filesystem::path& path) {
             throw Error(where + ": grid 'density': a non-linear (frustum) transform is not supported");
         const openvdb::CoordBBox bbox = density->evalActiveVoxelBoundingBox();
         if (bbox.empty()) throw Error(where + ": grid 'density' has no active voxels");
+        // In 64 bits: a box from -2^31 to 2^31 - 1 is 2^32 voxels wide, more than bbox.dim()'s int32.
+        int64_t extent[3];
+        for (int c = 0; c < 3; ++c) extent[c] = int64_t(bbox.max()[c]) - int64_t(bbox.min()[c]) + 1;
+        if (double(extent[0]) * double(extent[1]) * double(extent[2]) > double(max_voxels))
+            throw Error(where + ": grid 'density': active bounding box " + std::to_string(extent[0]) + "x" +
+                        std::to_string(extent[1]) + "x" + std::to_string(extent[2]) +
+                        " is over the dense limit of " + std::to_string(max_voxels) + " voxels");
         const openvdb::Coord dim = bbox.dim();
-        const size_t n = size_t(dim.x()) * size_t(dim.y()) * size_t(dim.z());  // each <= 2^32: no overflow
-        if (n > k_max_dense_voxels)
-            throw Error(where + ": grid 'density': active bounding box " + std::to_string(dim.x()) + "x" +
-                        std::to_string(dim.y()) + "x" + std::to_string(dim.z()) +
-                        " is over the dense limit of " + std::to_string(k_max_dense_voxels) + " voxels");
+        const size_t n = size_t(dim.x()) * size_t(dim.y()) * size_t(dim.z());
 
         VolumeGrid g;
         g.source = where;
@@ -109,7 +115,12 @@ VolumeGrid read_openvdb_grid(const std::filesystem::path& path) {
         g.ny = dim.y();
         g.nz = dim.z();
         g.local_to_index = local_to_dense_index(density->transform(), bbox.min());
-        g.density.assign(n, 0.0f);
+        with_memory_context(where + ": grid 'density': a dense " + std::to_string(dim.x()) + "x" +
+                                std::to_string(dim.y()) + "x" + std::to_string(dim.z()) + " grid",
+                            double(n) * (4.0 + 12.0), "use a coarser grid", [&] {
+                                g.density.assign(n, 0.0f);
+                                g.color.reserve(n);  // density and colour together, or neither
+                            });
         scatter_active(*density, bbox, g.density, [](float v) { return v; });
 
         if (!color) {
@@ -135,6 +146,12 @@ VolumeGrid read_openvdb_grid(const std::filesystem::path& path) {
         return g;
     } catch (const Error&) {
         throw;
+    } catch (const std::bad_alloc&) {
+        // OpenVDB 10 allocates what a size field in the file says before reading it: a corrupt one asks for
+        // up to 2^63 bytes. (Our own dense arrays report their size above.)
+        throw Error(where +
+                    ": cannot read OpenVDB file: OpenVDB asked for more memory than this machine could "
+                    "allocate (a corrupt size field, or a grid too large for this machine)");
     } catch (const std::exception& e) {
         // openvdb::Exception ("IoError: ..."), or std::ios/bad_alloc from a corrupt stream: one line.
         std::string msg = e.what();

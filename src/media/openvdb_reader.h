@@ -10,7 +10,8 @@ namespace npt::media {
 
 // Values are returned as stored (no clamping of negative or NaN densities: load_volume_grid does that).
 // Throws npt::Error naming the file and the grid.
-VolumeGrid read_openvdb_grid(const std::filesystem::path& path);
+// A density box over max_voxels is an error.
+VolumeGrid read_openvdb_grid(const std::filesystem::path& path, size_t max_voxels = k_max_dense_voxels);
 
 // openvdb::initialize(), once per process, safe from several threads: every use of OpenVDB (this reader,
 // the bake writer) calls it first.

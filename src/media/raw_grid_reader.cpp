@@ -1,5 +1,6 @@
 #include "media/raw_grid_reader.h"
 
+#include <algorithm>
 #include <bit>
 #include <charconv>
 #include <cstring>
@@ -59,10 +60,11 @@ VolumeGrid read_raw_grid(const std::filesystem::path& path, const GridLoadOption
         throw Error(where + ": grid size " + std::to_string(w) + "x" + std::to_string(h) + "x" +
                     std::to_string(d) + " has a zero dimension");
     // Each factor is checked before multiplying, so the product cannot overflow.
-    if (w > k_max_dense_voxels || h > k_max_dense_voxels || d > k_max_dense_voxels ||
-        w * h > k_max_dense_voxels || w * h * d > k_max_dense_voxels)
+    const size_t limit = std::min(options.max_voxels, k_max_dense_voxels);
+    if (w > limit || h > limit || d > limit ||
+        w * h > limit || w * h * d > limit)
         throw Error(where + ": grid size " + std::to_string(w) + "x" + std::to_string(h) + "x" +
-                    std::to_string(d) + " is over the dense limit of " + std::to_string(k_max_dense_voxels) +
+                    std::to_string(d) + " is over the dense limit of " + std::to_string(limit) +
                     " voxels");
     const size_t n = w * h * d;
     const Vec3 size = options.local_max - options.local_min;

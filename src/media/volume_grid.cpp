@@ -82,18 +82,17 @@ VolumeGrid load_volume_grid(const std::filesystem::path& path, const GridLoadOpt
     VolumeGrid g;
     try {
         if (ext == ".vdb")
-            g = read_openvdb_grid(path);
+            g = read_openvdb_grid(path, std::min(options.max_voxels, k_max_dense_voxels));
         else if (ext == ".nvdb")
-            g = read_nanovdb_grid(path);
+            g = read_nanovdb_grid(path, std::min(options.max_voxels, k_max_dense_voxels));
         else if (ext == ".bin")
             g = read_raw_grid(path, options);
         else
             throw Error(where + ": unknown volume grid extension '" + ext +
                         "' (expected .vdb, .nvdb or an instant-ngp {W}x{H}x{D}_*.bin)");
     } catch (const std::bad_alloc&) {
-        // The dense box is at most k_max_dense_voxels (2^28 voxels, 4 GiB of density and colour).
-        throw Error(where + ": the grid's dense box (up to " +
-                    format_bytes(double(k_max_dense_voxels) * 16.0) +
+        // The dense box is at most max_voxels (2^28 voxels by default, 4 GiB of density and colour).
+        throw Error(where + ": the grid's dense box (up to " + format_bytes(double(std::min(options.max_voxels, k_max_dense_voxels)) * 16.0) +
                     ") needs more memory than this machine could allocate: bake it with a smaller --res");
     }
     sanitize(g);

@@ -1,6 +1,7 @@
 // Host-side owner of a loaded volume grid (any file format) and the view the per-sample code reads.
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -19,19 +20,22 @@ struct VolumeGrid {
     GridView view() const { return GridView{nx, ny, nz, density.data(), color.data(), local_to_index}; }
 };
 
+// The largest dense grid we allocate (voxels): beyond this a sparse representation is needed (a later issue).
+constexpr size_t k_max_dense_voxels = size_t(1) << 28;
+
 // How a file's values become the field (from the scene's `extras.volume`, see docs/formats.md).
 struct GridLoadOptions {
     Vec3 local_min{-1.0f}, local_max{1.0f};  // the cube's local bounds: what a raw grid spans
     // Raw grids are instant-ngp output: colours are sRGB-encoded (converted to linear) unless this is false.
     bool raw_color_is_srgb = true;
+    // The dense limit; lower only where a smaller grid is all that may be asked for (the fuzz harness: a
+    // 2^28-voxel grid from a few bytes is legitimate, and filling it under ASan takes longer than its timeout).
+    size_t max_voxels = k_max_dense_voxels;
 };
 
 // Loads .vdb (OpenVDB), .nvdb (NanoVDB) or a raw instant-ngp grid ({W}x{H}x{D}_*.bin) by extension and name.
 // Negative or NaN densities are clamped to 0 with one warning per file. Throws npt::Error naming file and
 // field.
 VolumeGrid load_volume_grid(const std::filesystem::path& path, const GridLoadOptions& options);
-
-// The largest dense grid we allocate (voxels): beyond this a sparse representation is needed (a later issue).
-constexpr size_t k_max_dense_voxels = size_t(1) << 28;
 
 }  // namespace npt::media

@@ -2,18 +2,18 @@
 // size 0.1 + translation, and a rotation), written, loaded and sampled at local points against hand-computed
 // values; bad files; and cornell_volume's real volume.vdb.
 #include <gtest/gtest.h>
-// clang-format off
-#include "media/nanovdb_headers.h"  // NanoVDB with its own asserts off
-// clang-format on
 #include <openvdb/openvdb.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <numbers>
 #include <string>
 #include <vector>
 
+#include "bake/nanovdb_convert.h"
 #include "log_capture.h"
 #include "media/volume_grid.h"
 #include "test_support.h"
@@ -34,11 +34,7 @@ void write_grids(const fs::path& path, const openvdb::GridPtrVec& grids, Format 
         openvdb::io::File(path.string()).write(grids);
         return;
     }
-    std::vector<nanovdb::GridHandle<>> handles;
-    for (const auto& g : grids)
-        handles.push_back(
-            nanovdb::openToNanoVDB(g, nanovdb::StatsMode::Default, nanovdb::ChecksumMode::Full));
-    nanovdb::io::writeGrids(path.string(), handles);
+    bake::write_nanovdb_grids(path, grids, /*full_checksum=*/true);
 }
 
 // Voxel size 0.1, translation (0.3, -0.2, 0.5): index (i, j, k) is at local 0.1 (i, j, k) + (0.3, -0.2, 0.5).
@@ -268,6 +264,46 @@ TEST_P(VdbGrid, NotAGridFile) {
     }
 }
 
+// OpenVDB 10 trusts the size fields inside a grid (bloscFromStream, zipFromStream): a flipped one made it ask
+// for 2^60 bytes, or copy a block of the claimed size past the end of a node's buffer. Each 8 bytes of the
+// file that read as a plausible size (a compressed block's, or minus an uncompressed one's) is set to 2^60 +
+// 64, then to the size plus 64: every load ends in an npt::Error naming the file (no other exception, no
+// sanitizer report) or loads, and the blocks' sizes are among the errors.
+TEST(OpenVdbCorruptSize, SizeFieldsAreCheckedBeforeOpenVdbTrustsThem) {
+    openvdb::initialize();
+    const uint32_t compressions[] = {openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK,
+                                     openvdb::io::COMPRESS_ZIP, openvdb::io::COMPRESS_NONE};
+    for (const uint32_t compression : compressions) {
+        const auto path = test::temp_dir() / "sizes.vdb";
+        openvdb::io::File file(path.string());
+        file.setCompression(compression);
+        file.write(known_grids(scaled_translated()));
+        std::ifstream in(path, std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        int tried = 0, block_errors = 0;
+        for (size_t at = 0; at + 8 <= bytes.size(); ++at) {
+            int64_t v;
+            std::memcpy(&v, bytes.data() + at, 8);
+            if (v == 0 || v < -int64_t(bytes.size()) || v > int64_t(bytes.size())) continue;
+            for (const int64_t bad_value : {(int64_t(1) << 60) + 64, v < 0 ? v - 64 : v + 64}) {
+                std::string bad = bytes;
+                std::memcpy(bad.data() + at, &bad_value, 8);
+                test::write_file(path, bad);
+                ++tried;
+                try {
+                    load_volume_grid(path, {});
+                } catch (const Error& e) {
+                    const std::string msg = e.what();
+                    EXPECT_NE(msg.find(path.string()), std::string::npos) << msg;
+                    block_errors += msg.find("block") != std::string::npos;
+                }
+            }
+        }
+        EXPECT_GT(tried, 0);
+        EXPECT_GT(block_errors, 0) << "compression " << compression << ": no block size among " << tried;
+    }
+}
+
 // NanoVDB files carry a CRC checksum; nerfpt bake writes a full one (voxel data included) and the reader
 // verifies it, so a flipped voxel is an error. NanoVDB's default partial checksum leaves voxels uncovered:
 // such a file loads with a warning that says so.
@@ -289,9 +325,7 @@ TEST(NanoVdbChecksum, AFlippedVoxelValueIsDetected) {
     test::expect_error_message([&] { load_volume_grid(full, {}); }, {full.string(), "'density'", "corrupt"});
 
     const auto partial = test::temp_dir() / "partial.nvdb";
-    std::vector<nanovdb::GridHandle<>> handles;
-    for (const auto& g : known_grids(scaled_translated())) handles.push_back(nanovdb::openToNanoVDB(g));
-    nanovdb::io::writeGrids(partial.string(), handles);
+    bake::write_nanovdb_grids(partial, known_grids(scaled_translated()), /*full_checksum=*/false);
     flip_last_075(partial);
     test::LogCapture log;
     EXPECT_NO_THROW(load_volume_grid(partial, {}));
