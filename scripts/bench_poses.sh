@@ -51,7 +51,7 @@ frames_of() {  # capture name -> its frames folder, made when missing
 
 table=$out/table.md
 {
-    echo "| capture | quality | features/frame | matches/pair (inliers) | extraction s wall / CPU (load) | matching | mapping | total wall / CPU | registered | jumps | rotation median / max (deg) | centre median / max (%) |"
+    echo "| capture | quality | features/frame | matches/pair (verified pairs, inliers/pair) | extraction s wall / CPU (load) | matching | mapping | total wall / CPU | registered | jumps | rotation median / max (deg) | centre median / max (%) |"
     echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
 } >"$table"
 for cap in $captures; do
@@ -99,7 +99,7 @@ else:
     rot = f"{pe['rotation_deg']['median']:.3f} / {pe['rotation_deg']['max']:.3f}"
     centre = f"{pe['centre_percent']['median']:.3f} / {pe['centre_percent']['max']:.3f}"
 f, m, v = db["features_per_image"], db["matches_per_pair"], db["inliers_per_verified_pair"]
-print(f"| {cap} | {q} | {f['mean']:.0f} | {m['mean']:.0f} ({v['mean']:.0f}) | {cell('extraction')} | {cell('matching')} | "
+print(f"| {cap} | {q} | {f['mean']:.0f} | {m['mean']:.0f} ({v['count']}, {v['mean']:.0f}) | {cell('extraction')} | {cell('matching')} | "
       f"{cell('mapping')} | {wall:.0f} / {cpu:.0f} | {reg[1]} of {reg[2]} | {jumps[1] if jumps else 0} | {rot} | {centre} |")
 EOF
         tail -1 "$table" >&2
