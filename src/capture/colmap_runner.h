@@ -14,8 +14,8 @@ namespace npt::capture {
 
 // How much work COLMAP spends on the poses (`--poses-quality`). Measured in docs/benchmarks.md ("How fast
 // COLMAP can be"): `best` is COLMAP's own extraction, matching and mapper settings (what nerfpt ran before
-// the option existed); `balanced` and `fast` extract fewer, coarser SIFT features, a budget that follows the
-// image size, and run fewer and shorter bundle adjustments.
+// the option existed); `balanced` and `fast` cap the SIFT features with a budget that follows the image size
+// (`fast` also extracts at the frame's own size, not doubled) and run fewer, shorter bundle adjustments.
 enum class PosesQuality { Fast, Balanced, Best };
 PosesQuality parse_poses_quality(const std::string& name);  // "fast", "balanced", "best"; throws npt::Error
 const char* poses_quality_name(PosesQuality quality);

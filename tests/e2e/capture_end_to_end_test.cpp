@@ -84,7 +84,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
         "of the trajectory scale\n",
         cmp.count, cmp.rotation_deg.median, cmp.rotation_deg.max, rel_median, rel_max);
     // The medians are issue 16's limits; SIFT at 320x240 and bundle adjustment deliver 0.34-0.39 deg and
-    // 0.39-0.44% here, 0.58-0.70 deg and 1.3-1.7% max (six runs, --poses-quality fast and best;
+    // 0.39-0.44% here, 0.58-0.70 deg and 1.3-1.7% max (seven runs, --poses-quality fast and best;
     // docs/benchmarks.md): the rotation median is the tight one. The maxima leave 2-3x room. A wrong axis
     // convention gives ~180 degrees, a pose paired with its neighbour's 15 degrees and 25% (both checked
     // below), so these cannot pass by luck.
