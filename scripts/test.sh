@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds Release in build/ and runs every test that needs no GPU. Extra arguments go to
-# ctest (e.g. scripts/test.sh -R Progress -V). Exits non-zero when the build or a test fails.
+# Installs what is missing, builds Release in build/ and runs every test that needs no GPU and is not labelled
+# `long`. Extra arguments go to ctest (e.g. scripts/test.sh -R Progress -V). Exits non-zero when the build or a
+# test fails.
 #
 # --sanitize (first argument): instead, the ASan + UBSan build in build-san/ (clang; scripts/configure_sanitize.sh):
 # the unit and CLI tests under the sanitizers, then every fuzz harness for $NERFPT_FUZZ_SECONDS (default 10)
@@ -43,4 +44,5 @@ scripts/configure.sh
 cmake --build build -j "$jobs"
 
 cd build
-ctest -LE gpu --output-on-failure -j "$jobs" "$@"
+# `long`: end-to-end tests of many CPU minutes (tests/e2e_long), run by hand (ctest -L long), not in CI's 30.
+ctest -LE 'gpu|long' --output-on-failure -j "$jobs" "$@"

@@ -88,11 +88,11 @@ std::string capture_report_markdown(const nlohmann::json& record) {
     }
     if (const auto p = get("poses"); !p.empty()) {
         md += fmt::format(
-            "| poses | COLMAP registered {} of {} frames, {} points, mean reprojection error {:.3f} px, {} "
+            "| poses | COLMAP ({}) registered {} of {} frames, {} points, mean reprojection error {:.3f} px, {} "
             "jumps "
             "in the camera path | {:.1f} s (extraction {:.1f}, matching {:.1f}, mapping {:.1f}) |\n",
-            p.value("registered", 0), p.value("frames", 0), p.value("points", 0), num(p, "reprojection_px"),
-            p.value("path_jumps", 0), num(p, "seconds"), num(p, "extraction_seconds"),
+            p.value("quality", "best"), p.value("registered", 0), p.value("frames", 0), p.value("points", 0),
+            num(p, "reprojection_px"), p.value("path_jumps", 0), num(p, "seconds"), num(p, "extraction_seconds"),
             num(p, "matching_seconds"), num(p, "mapping_seconds"));
         total += num(p, "seconds");
     }

@@ -127,6 +127,7 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
     cmd->add_option("--matcher", args.matcher, "poses: sequential (video order) or exhaustive")
         ->check(CLI::IsMember({"sequential", "exhaustive"}))
         ->capture_default_str();
+    add_poses_quality_option(cmd, args.poses_quality, "poses: ");
     cmd->add_option("--aabb-scale", args.aabb_scale, "poses: instant-ngp's scene extent in unit cubes")
         ->check(CLI::IsMember({1, 2, 4, 8, 16, 32, 64, 128}))
         ->capture_default_str();
@@ -231,11 +232,15 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         p.output = transforms.string();
         p.work = (work / "colmap").string();
         p.matcher = args.matcher;
+        p.quality = args.poses_quality;
+        p.threads = args.threads;
         p.aabb_scale = args.aabb_scale;
         p.min_registered = args.min_registered;
         const Clock clock;
         const PosesSummary s = poses_stage(p, global, interrupts);
-        record.finish("poses", {{"frames", s.frames},
+        record.finish("poses", {{"quality", args.poses_quality},
+                                {"max_num_features", s.max_num_features},
+                                {"frames", s.frames},
                                 {"registered", s.registered},
                                 {"points", s.points},
                                 {"reprojection_px", s.reprojection_px},
@@ -243,6 +248,9 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                 {"extraction_seconds", s.seconds[0]},
                                 {"matching_seconds", s.seconds[1]},
                                 {"mapping_seconds", s.seconds[2]},
+                                {"extraction_cpu_seconds", s.cpu_seconds[0]},
+                                {"matching_cpu_seconds", s.cpu_seconds[1]},
+                                {"mapping_cpu_seconds", s.cpu_seconds[2]},
                                 {"seconds", clock.seconds()}});
     }
 

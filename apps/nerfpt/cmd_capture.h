@@ -21,6 +21,7 @@ struct CaptureArgs {
     std::string hsv_min, hsv_max;
     // poses
     std::string matcher = "sequential";
+    std::string poses_quality = "fast";  // capture::PosesQuality
     int aabb_scale = 16;
     double min_registered = 0.5;
     // split, train, eval

@@ -14,6 +14,14 @@
 namespace npt::cli {
 namespace fs = std::filesystem;
 
+void add_poses_quality_option(CLI::App* cmd, std::string& quality, const std::string& prefix) {
+    cmd->add_option("--poses-quality", quality,
+                    prefix + "COLMAP's effort: fast, balanced or best (COLMAP's own settings); 'nerfpt poses "
+                             "--help' says what each does")
+        ->check(CLI::IsMember({"fast", "balanced", "best"}))
+        ->capture_default_str();
+}
+
 CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
     CLI::App* cmd = app.add_subcommand("poses", "Recover camera poses of frames with COLMAP; write transforms.json");
     cmd->footer(
@@ -25,6 +33,18 @@ CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
         "to +Z, the point the cameras look at moved to the origin, the mean camera distance scaled to 4,\n"
         "aabb_scale 16 (docs/formats.md). Fails without writing when fewer than --min-registered of the frames\n"
         "are registered.\n"
+        "--poses-quality sets how much work COLMAP does (measured in docs/benchmarks.md, 'How fast COLMAP can\n"
+        "be'; 100 frames of 540x960 with rich texture on 2 cores):\n"
+        "  fast      (default) SIFT at the frame's own size (frames under 800 px are still doubled), at most\n"
+        "            ~1000 features per megapixel (518 at 540x960, 922 at 720x1280; COLMAP keeps whole scale\n"
+        "            levels, so up to ~1.6x that), and a global bundle adjustment only when the model has\n"
+        "            doubled, with fewer iterations.\n"
+        "  balanced  SIFT on the doubled frame as COLMAP does, at most ~2000 features per megapixel of it,\n"
+        "            bundle adjustments between fast's and best's: more and finer features, to try when fast\n"
+        "            registers too few frames.\n"
+        "  best      COLMAP's own settings (up to 8192 features per frame, a global bundle adjustment every\n"
+        "            10% of growth): what nerfpt ran before the option existed; slowest.\n"
+        "Every quality passes --threads to each COLMAP step and matches each frame with its next 15.\n"
         "Example: nerfpt poses out/beer/frames -o out/beer/transforms.json");
     cmd->add_option("FRAMES", args.frames, "Folder of frames (.png/.jpg), e.g. written by 'nerfpt curate'")
         ->required();
@@ -41,6 +61,9 @@ CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
     cmd->add_option("--min-registered", args.min_registered,
                     "Fraction of the frames that must be registered, 0..1 (default: 0.5)")
         ->check(CLI::Range(0.0, 1.0));
+    add_poses_quality_option(cmd, args.quality, "");
+    cmd->add_option("--threads", args.threads, "COLMAP's threads for every step, 0 = all hardware threads")
+        ->check(CLI::Range(0, 4096));
     return cmd;
 }
 
@@ -59,15 +82,22 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
     capture::ColmapSettings s;
     s.matcher = args.matcher;
     s.max_image_size = args.max_image_size;
+    s.quality = capture::parse_poses_quality(args.quality);
+    s.threads = args.threads;
     const capture::ColmapRun run = capture::run_colmap(args.frames, work, s, [&](const std::string& step) {
         if (!global.quiet) fmt::print(stderr, "poses: COLMAP {} ...\n", step);
     });
     const size_t registered = run.model.images.size();
     const capture::ReprojectionStats rep = capture::reprojection_error(run.model);
-    fmt::print("COLMAP registered {} of {} frames ({}), {} points, mean reprojection error {:.3f} px; "
-               "extraction {:.0f} s, matching {:.0f} s, mapping {:.0f} s\n",
+    fmt::print("COLMAP registered {} of {} frames ({}), {} points, mean reprojection error {:.3f} px "
+               "(--poses-quality {}, up to {} features per frame)\n",
                registered, run.frames, run.model_folder.string(), run.model.points.size(), rep.mean_px,
-               run.seconds[0], run.seconds[1], run.seconds[2]);
+               args.quality, run.max_num_features);
+    // CPU time beside wall time: on a shared machine only the first is comparable between runs.
+    static const char* const k_steps[3] = {"extraction", "matching", "mapping"};
+    for (int i = 0; i < 3; ++i)
+        fmt::print("  {:<10} {:6.1f} s wall, {:6.1f} s CPU (load {:.2f} at start)\n", k_steps[i], run.seconds[i],
+                   run.cpu_seconds[i], run.load_at_start[i]);
     if (double(registered) < args.min_registered * double(run.frames) || registered < 3)
         throw Error(fmt::format(
             "COLMAP registered only {} of {} frames (--min-registered {}): try --matcher exhaustive, curate "
@@ -101,7 +131,11 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
     summary.points = run.model.points.size();
     summary.reprojection_px = rep.mean_px;
     summary.path_jumps = jumps.size();
-    for (int i = 0; i < 3; ++i) summary.seconds[i] = run.seconds[i];
+    for (int i = 0; i < 3; ++i) {
+        summary.seconds[i] = run.seconds[i];
+        summary.cpu_seconds[i] = run.cpu_seconds[i];
+    }
+    summary.max_num_features = run.max_num_features;
     return summary;
 }
 

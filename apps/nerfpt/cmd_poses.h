@@ -14,10 +14,15 @@ struct PosesArgs {
     std::string output;
     std::string work;  // empty: <output folder>/colmap
     std::string matcher = "sequential";
+    std::string quality = "fast";  // capture::PosesQuality: fast, balanced, best
     int aabb_scale = 16;
     int max_image_size = 1600;
     double min_registered = 0.5;
+    int threads = 0;  // COLMAP's threads; 0: all hardware threads
 };
+
+// --poses-quality, shared by `nerfpt poses` and `nerfpt capture`.
+void add_poses_quality_option(CLI::App* cmd, std::string& quality, const std::string& prefix);
 
 CLI::App* add_poses_command(CLI::App& app, PosesArgs& args);
 int run_poses(const PosesArgs& args, const GlobalSettings& global, InterruptGuard& interrupts);
@@ -27,7 +32,9 @@ struct PosesSummary {
     size_t frames = 0, registered = 0, points = 0;
     double reprojection_px = 0;
     size_t path_jumps = 0;  // capture/path_continuity.h
-    double seconds[3] = {0, 0, 0};  // extraction, matching, mapping
+    double seconds[3] = {0, 0, 0};      // extraction, matching, mapping (wall)
+    double cpu_seconds[3] = {0, 0, 0};  // the same steps' CPU time (user + system)
+    int max_num_features = 0;       // SIFT budget per frame
 };
 // The stage itself (COLMAP, checks, transforms.json), printing as `nerfpt poses` does.
 PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, InterruptGuard& interrupts);

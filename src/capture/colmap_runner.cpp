@@ -3,12 +3,15 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <thread>
 #include <vector>
 
 #include "core/error.h"
 #include "core/executable.h"
+#include "core/image_io.h"
 
 namespace npt::capture {
 namespace fs = std::filesystem;
@@ -31,7 +34,117 @@ bool is_image(const fs::path& p) {
     return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
 }
 
+// What a quality changes from COLMAP's defaults; the numbers are measured in docs/benchmarks.md ("How fast
+// COLMAP can be"). The CPU matcher of COLMAP 3.8 (FLANN k-d trees, built and searched per pair) costs about
+// 0.08-0.09 ms per feature per pair (the synthetic 540x960 capture: 825, 1557 and 2440 features per frame,
+// 84, 189 and 285 CPU seconds for 1295 pairs), so matching grows with features x pairs; extraction with the
+// pixels SIFT runs on (doubling the frame: 4x) and the features it keeps; mapping mostly with how often the
+// global bundle adjustment runs.
+struct QualityPreset {
+    bool colmap_defaults;  // best: pass nothing but the threads and max_image_size
+    // SIFT on the frame doubled (COLMAP's first_octave -1, 4x the pixels) or at its own size (0). Doubling
+    // finds the small features that a frame smaller than k_min_sift_side needs to register at all.
+    bool upsample;
+    // Feature budget per frame (COLMAP's max_num_features): this many per megapixel of the frame SIFT sees,
+    // within [min, max]. COLMAP keeps whole scale levels, coarsest first, until the budget is passed, so a
+    // frame keeps up to ~1.6x the budget (540x960, budget 518: 825 features per frame).
+    double features_per_megapixel;
+    int min_features, max_features;
+    // Mapper: a global bundle adjustment each time the model grew by this ratio (COLMAP: 1.1), with at most
+    // these iterations and refinements; local ones with at most these iterations.
+    double ba_global_ratio;
+    int ba_global_max_iterations, ba_global_max_refinements, ba_local_max_iterations;
+};
+
+// Frames whose longer side is below this are doubled for SIFT even by `fast`: at 320x240 without doubling
+// (~250 features) COLMAP registered 46 of 71 turntable frames, doubled (~700) all 71.
+constexpr int k_min_sift_side = 800;
+// A frame doubled because it is small keeps at least this budget: it has few features to begin with (the
+// 320x240 turntable ~700), and the accuracy of such captures rests on all of them.
+constexpr int k_min_features_doubled = 1024;
+// Ceres runs a bundle adjustment single-threaded below this many residuals; COLMAP's 50000 keeps most of a
+// 100-frame capture's adjustments on one core.
+constexpr int k_ba_min_residuals_for_threads = 1000;
+
+QualityPreset preset(PosesQuality q) {
+    switch (q) {
+        case PosesQuality::Fast:
+            return {false, false, 1000, 512, 4096, 2.0, 20, 1, 10};
+        case PosesQuality::Balanced:
+            return {false, true, 2000, 2048, 8192, 1.5, 25, 2, 15};
+        case PosesQuality::Best:
+            break;
+    }
+    return {true, true, 0, 8192, 8192, 1.1, 50, 5, 25};
+}
+
+std::string arg(double v) {
+    std::string s = std::to_string(v);
+    s.erase(s.find_last_not_of('0') + 1);
+    if (!s.empty() && s.back() == '.') s.pop_back();
+    return s;
+}
+
 }  // namespace
+
+PosesQuality parse_poses_quality(const std::string& name) {
+    if (name == "fast") return PosesQuality::Fast;
+    if (name == "balanced") return PosesQuality::Balanced;
+    if (name == "best") return PosesQuality::Best;
+    throw Error("--poses-quality '" + name + "': expected fast, balanced or best");
+}
+
+const char* poses_quality_name(PosesQuality q) {
+    switch (q) {
+        case PosesQuality::Fast:
+            return "fast";
+        case PosesQuality::Balanced:
+            return "balanced";
+        case PosesQuality::Best:
+            break;
+    }
+    return "best";
+}
+
+ColmapStepOptions colmap_step_options(const ColmapSettings& s, int frame_width, int frame_height) {
+    const QualityPreset p = preset(s.quality);
+    const int threads = s.threads > 0 ? s.threads : std::max(1, int(std::thread::hardware_concurrency()));
+    const std::string t = std::to_string(threads);
+    ColmapStepOptions o;
+    o.extraction = {"--SiftExtraction.num_threads", t, "--SiftExtraction.max_image_size",
+                    std::to_string(s.max_image_size)};
+    o.matching = {"--SiftMatching.num_threads", t};
+    o.mapping = {"--Mapper.num_threads", t};
+    o.max_num_features = p.max_features;
+    if (p.colmap_defaults) return o;
+    // The frame as SIFT sees it: shrunk to max_image_size, doubled when upsampled.
+    const double side = std::max(1, std::max(frame_width, frame_height));
+    const double shrink = std::min(1.0, double(s.max_image_size) / side);
+    const bool upsample = p.upsample || side * shrink < k_min_sift_side;
+    const double megapixels =
+        double(frame_width) * double(frame_height) * shrink * shrink * (upsample ? 4.0 : 1.0) * 1e-6;
+    const int min_features = upsample && !p.upsample ? std::max(p.min_features, k_min_features_doubled)
+                                                     : p.min_features;
+    o.max_num_features =
+        std::clamp(int(std::lround(p.features_per_megapixel * megapixels)), min_features, p.max_features);
+    const std::string features = std::to_string(o.max_num_features);
+    const std::vector<std::string> extraction = {"--SiftExtraction.first_octave", upsample ? "-1" : "0",
+                                                 "--SiftExtraction.max_num_features", features};
+    const std::vector<std::string> matching = {"--SiftMatching.max_num_matches", features};
+    // Point colours are not used by nerfpt; reading every frame again for them costs ~5% of the mapping.
+    const std::vector<std::string> mapping = {
+        "--Mapper.ba_global_images_ratio", arg(p.ba_global_ratio),
+        "--Mapper.ba_global_points_ratio", arg(p.ba_global_ratio),
+        "--Mapper.ba_global_max_num_iterations", std::to_string(p.ba_global_max_iterations),
+        "--Mapper.ba_global_max_refinements", std::to_string(p.ba_global_max_refinements),
+        "--Mapper.ba_local_max_num_iterations", std::to_string(p.ba_local_max_iterations),
+        "--Mapper.ba_min_num_residuals_for_multi_threading", std::to_string(k_ba_min_residuals_for_threads),
+        "--Mapper.extract_colors", "0"};
+    o.extraction.insert(o.extraction.end(), extraction.begin(), extraction.end());
+    o.matching.insert(o.matching.end(), matching.begin(), matching.end());
+    o.mapping.insert(o.mapping.end(), mapping.begin(), mapping.end());
+    return o;
+}
 
 std::vector<std::string> list_frames(const fs::path& frames) {
     std::vector<std::string> names;
@@ -65,11 +178,18 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
     fs::create_directories(work / "sparse", ec);
     // COLMAP reads every file of the folder otherwise (curate.json, the contact sheet).
     const fs::path list = work / "frames.txt";
+    const std::vector<std::string> names = list_frames(frames);
     {
         std::ofstream f(list);
-        for (const auto& n : list_frames(frames)) f << n << "\n";
+        for (const auto& n : names) f << n << "\n";
         if (!f) throw Error(list.string() + ": cannot write the frame list");
     }
+    // One camera for all frames: the first frame's size decides the feature budget.
+    const ImageSize size = read_image_size(frames / names.front());
+    run.frame_width = size.width;
+    run.frame_height = size.height;
+    const ColmapStepOptions options = colmap_step_options(s, size.width, size.height);
+    run.max_num_features = options.max_num_features;
 
     const std::string gpu = "0";  // Debian's COLMAP is built without CUDA
     struct Step {
@@ -79,28 +199,34 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
     };
     std::vector<std::string> matching = {s.colmap, s.matcher + "_matcher", "--database_path", db.string(),
                                          "--SiftMatching.use_gpu", gpu};
+    matching.insert(matching.end(), options.matching.begin(), options.matching.end());
     if (s.matcher == "sequential") {
         for (const std::string& a : {std::string("--SequentialMatching.overlap"), std::to_string(s.sequential_overlap),
                                      std::string("--SequentialMatching.quadratic_overlap"),
                                      std::string(s.quadratic_overlap ? "1" : "0")})
             matching.push_back(a);
     }
+    std::vector<std::string> extraction = {s.colmap, "feature_extractor", "--database_path", db.string(),
+                                           "--image_path", frames.string(), "--image_list_path", list.string(),
+                                           "--ImageReader.single_camera", "1", "--ImageReader.camera_model",
+                                           s.camera_model, "--SiftExtraction.use_gpu", gpu};
+    extraction.insert(extraction.end(), options.extraction.begin(), options.extraction.end());
+    std::vector<std::string> mapping = {s.colmap, "mapper", "--database_path", db.string(), "--image_path",
+                                        frames.string(), "--output_path", (work / "sparse").string(),
+                                        "--image_list_path", list.string()};
+    mapping.insert(mapping.end(), options.mapping.begin(), options.mapping.end());
     const std::vector<Step> steps = {
-        {"feature extraction", "feature_extractor.log",
-         {s.colmap, "feature_extractor", "--database_path", db.string(), "--image_path", frames.string(),
-          "--image_list_path", list.string(),
-          "--ImageReader.single_camera", "1", "--ImageReader.camera_model", s.camera_model,
-          "--SiftExtraction.use_gpu", gpu, "--SiftExtraction.max_image_size", std::to_string(s.max_image_size)}},
+        {"feature extraction", "feature_extractor.log", extraction},
         {"matching", "matcher.log", matching},
-        {"mapping", "mapper.log",
-         {s.colmap, "mapper", "--database_path", db.string(), "--image_path", frames.string(), "--output_path",
-          (work / "sparse").string(), "--image_list_path", list.string()}},
+        {"mapping", "mapper.log", mapping},
     };
     for (size_t i = 0; i < steps.size(); ++i) {
         if (on_step) on_step(steps[i].name);
+        double load = 0;
+        if (getloadavg(&load, 1) == 1) run.load_at_start[i] = load;
         const auto t0 = std::chrono::steady_clock::now();
         const fs::path log = work / steps[i].log;
-        const int status = run_logged(steps[i].argv, log);
+        const int status = run_logged(steps[i].argv, log, &run.cpu_seconds[i]);
         run.seconds[i] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         if (status != 0)
             throw Error("COLMAP " + std::string(steps[i].name) + " failed (exit " + std::to_string(status) +

@@ -6,10 +6,19 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "capture/colmap_model.h"
 
 namespace npt::capture {
+
+// How much work COLMAP spends on the poses (`--poses-quality`). Measured in docs/benchmarks.md ("How fast
+// COLMAP can be"): `best` is COLMAP's own extraction, matching and mapper settings (what nerfpt ran before
+// the option existed); `balanced` and `fast` cap the SIFT features with a budget that follows the image size
+// (`fast` also extracts at the frame's own size, not doubled) and run fewer, shorter bundle adjustments.
+enum class PosesQuality { Fast, Balanced, Best };
+PosesQuality parse_poses_quality(const std::string& name);  // "fast", "balanced", "best"; throws npt::Error
+const char* poses_quality_name(PosesQuality quality);
 
 struct ColmapSettings {
     std::string matcher = "sequential";       // "sequential" (video frames in order) or "exhaustive"
@@ -22,13 +31,29 @@ struct ColmapSettings {
     // (docs/benchmarks.md); neighbours alone give one continuous path.
     int sequential_overlap = 15;
     bool quadratic_overlap = false;
+    PosesQuality quality = PosesQuality::Fast;
+    int threads = 0;  // every step's num_threads; 0: all hardware threads (passed explicitly all the same)
 };
+
+// The options of each COLMAP step that the quality and the frame size decide (after the database, image and
+// camera arguments every run passes), for run_colmap and for tests.
+struct ColmapStepOptions {
+    std::vector<std::string> extraction, matching, mapping;
+    int max_num_features = 0;  // the SIFT budget per frame that was chosen
+};
+ColmapStepOptions colmap_step_options(const ColmapSettings& settings, int frame_width, int frame_height);
 
 struct ColmapRun {
     ColmapModel model;
     std::filesystem::path model_folder;  // work/sparse/N that was chosen
     size_t frames = 0;                   // images in the frames folder
-    double seconds[3] = {0, 0, 0};       // extraction, matching, mapping
+    double seconds[3] = {0, 0, 0};       // extraction, matching, mapping: wall time
+    // The same steps' CPU time (user + system of COLMAP's threads), and the machine's 1-minute load average
+    // when each started: wall time means something only on a quiet machine, CPU time everywhere.
+    double cpu_seconds[3] = {0, 0, 0};
+    double load_at_start[3] = {0, 0, 0};
+    int frame_width = 0, frame_height = 0;  // of the first frame (COLMAP's single camera)
+    int max_num_features = 0;               // SIFT budget per frame (ColmapStepOptions)
 };
 
 // Called before each step with its name ("feature extraction", "matching", "mapping").

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -42,7 +43,7 @@ fs::path find_executable(const std::string& name) {
     return {};
 }
 
-int run_logged(const std::vector<std::string>& argv, const fs::path& log) {
+int run_logged(const std::vector<std::string>& argv, const fs::path& log, double* cpu_seconds) {
     if (argv.empty()) throw Error("run_logged: no program");
     std::vector<char*> args;
     for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
@@ -64,8 +65,13 @@ int run_logged(const std::vector<std::string>& argv, const fs::path& log) {
     posix_spawnattr_destroy(&attr);
     if (err != 0) throw Error("cannot run " + argv[0] + ": " + std::strerror(err));
     int status = 0;
-    while (::waitpid(pid, &status, 0) < 0)
+    struct rusage usage {};
+    while (::wait4(pid, &status, 0, &usage) < 0)
         if (errno != EINTR) throw Error("lost track of " + argv[0] + ": " + std::strerror(errno));
+    if (cpu_seconds) {
+        const auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+        *cpu_seconds = seconds(usage.ru_utime) + seconds(usage.ru_stime);
+    }
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 

@@ -202,6 +202,18 @@ Image read_image(const fs::path& path, bool srgb) {
     return decode_stb(bytes.data(), bytes.size(), path.string(), srgb);
 }
 
+ImageSize read_image_size(const fs::path& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw Error(path.string() + ": file not found");
+    int w = 0, h = 0, n = 0;
+    if (!stbi_info(path.string().c_str(), &w, &h, &n)) {
+        const char* why = stbi_failure_reason();
+        throw Error(path.string() + ": not a readable image (" + (why ? why : "unknown format") + ")");
+    }
+    check_size(w, h, path.string());
+    return {w, h};
+}
+
 void write_exr(const fs::path& path, const Image& image) {
     check_writable(path, image);
     const fs::path tmp = temp_sibling(path);

@@ -20,6 +20,13 @@ constexpr int k_max_image_side = 32768;
 // the file.
 Image read_image(const std::filesystem::path& path, bool srgb = true);
 
+// Width and height from the file's header, without decoding the pixels (PNG/JPG/TGA/HDR through stb).
+// Throws npt::Error naming the file when it cannot be read.
+struct ImageSize {
+    int width = 0, height = 0;
+};
+ImageSize read_image_size(const std::filesystem::path& path);
+
 // The same for an encoded file held in memory (a glTF .glb buffer view or data URI); `name` is for messages.
 Image decode_image(const unsigned char* data, size_t size, const std::string& name, bool srgb = true);
 

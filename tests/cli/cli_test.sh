@@ -159,10 +159,20 @@ PATH="$tmp/emptybin" "$nerfpt" poses "$tmp/frames" -o "$tmp/transforms.json" >"$
 grep -q "'colmap' not found on PATH: install COLMAP" "$tmp/err" || fail "poses without colmap: $(cat "$tmp/err")"
 [[ ! -e "$tmp/transforms.json" ]] || fail "poses without colmap wrote transforms.json"
 expect_error 2 "matcher" poses "$tmp/frames" -o "$tmp/transforms.json" --matcher fancy
+# --poses-quality: documented, and anything but fast/balanced/best refused before COLMAP runs.
+run poses --help
+[[ $rc -eq 0 ]] || fail "poses --help: exit code $rc"
+for opt in --poses-quality fast balanced best --threads --matcher --min-registered; do
+    grep -q -- "$opt" "$tmp/out" || fail "nerfpt poses --help does not mention $opt"
+done
+expect_error 2 "--poses-quality.*fastest" poses "$tmp/frames" -o "$tmp/transforms.json" --poses-quality fastest
+expect_error 2 "--poses-quality" poses "$tmp/frames" -o "$tmp/transforms.json" --poses-quality
+expect_error 2 "--threads" poses "$tmp/frames" -o "$tmp/transforms.json" --threads -1
 
 # capture: missing video, missing tools, a work folder that holds another video's capture, bad options.
 run capture --help
-for opt in --target-frames --matcher --holdout-every --train-time --train-steps --downscale --turntable-frames --force; do
+for opt in --target-frames --matcher --poses-quality --holdout-every --train-time --train-steps --downscale \
+    --turntable-frames --force; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt capture --help does not mention $opt"
 done
 expect_error 1 "VIDEO.*no_such.mp4" capture "$tmp/no_such.mp4" -o "$tmp/cap"
@@ -175,6 +185,7 @@ grep -q "ffmpeg, ffprobe, colmap not found on PATH.*apt-get install ffmpeg colma
 [[ ! -e "$tmp/cap" ]] || fail "capture without tools created its work folder"
 expect_error 2 "holdout-every" capture "$tmp/clip.mp4" -o "$tmp/cap" --holdout-every -1
 expect_error 2 "downscale" capture "$tmp/clip.mp4" -o "$tmp/cap" --downscale 100
+expect_error 2 "--poses-quality.*exhaustive" capture "$tmp/clip.mp4" -o "$tmp/cap" --poses-quality exhaustive
 if command -v ffmpeg >/dev/null && command -v colmap >/dev/null; then
     expect_error 1 "holdout-every 1" capture "$tmp/clip.mp4" -o "$tmp/cap" --holdout-every 1
     ffmpeg -nostdin -v error -f lavfi -i testsrc=size=64x48:rate=10 -frames:v 10 -pix_fmt yuv420p "$tmp/real.mp4"

@@ -73,8 +73,9 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     const auto estimate = capture::read_transforms_poses(work / "transforms.json");
     const auto truth = capture::read_transforms_poses(dir / "truth.json");
     const capture::MatchedPoses matched = capture::match_by_name(estimate, truth);
-    // COLMAP registers every frame of a textured, sharp, slowly turning scene.
-    ASSERT_GE(int(matched.estimate.size()), kept - 1) << "registered frames";
+    // Issue 16's limits for the default --poses-quality: at least 98% of the frames registered, rotation
+    // error median < 0.5 degrees, centre error median < 1% of the trajectory scale.
+    ASSERT_GE(double(matched.estimate.size()), 0.98 * kept) << "registered frames of " << kept;
     const capture::PoseComparison cmp = capture::compare_poses(matched.estimate, matched.reference);
     const double rel_median = cmp.centre.median / cmp.trajectory_scale,
                  rel_max = cmp.centre.max / cmp.trajectory_scale;
@@ -82,13 +83,14 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
         "poses of %zu frames: rotation error median %.3f max %.3f deg; centre error median %.4f max %.4f "
         "of the trajectory scale\n",
         cmp.count, cmp.rotation_deg.median, cmp.rotation_deg.max, rel_median, rel_max);
-    // Thresholds: SIFT at 320x240 and bundle adjustment deliver 0.35 deg and 0.4% median, 0.7 deg and 1.7%
-    // max here (measured, docs/benchmarks.md); the limits leave 2-3x room for other COLMAP builds and
-    // encoders. A wrong axis convention gives ~180 degrees, a pose paired with its neighbour's 15 degrees and
-    // 25% (both checked below), so these cannot pass by luck.
-    EXPECT_LT(cmp.rotation_deg.median, 1.0);
+    // The medians are issue 16's limits; SIFT at 320x240 and bundle adjustment deliver 0.34-0.39 deg and
+    // 0.39-0.44% here, 0.58-0.70 deg and 1.3-1.7% max (seven runs, --poses-quality fast and best;
+    // docs/benchmarks.md): the rotation median is the tight one. The maxima leave 2-3x room. A wrong axis
+    // convention gives ~180 degrees, a pose paired with its neighbour's 15 degrees and 25% (both checked
+    // below), so these cannot pass by luck.
+    EXPECT_LT(cmp.rotation_deg.median, 0.5);
     EXPECT_LT(cmp.rotation_deg.max, 3.0);
-    EXPECT_LT(rel_median, 0.015);
+    EXPECT_LT(rel_median, 0.01);
     EXPECT_LT(rel_max, 0.05);
 
     // Negative controls, so that the limits are known to catch a broken stage: cameras left in COLMAP's

@@ -37,12 +37,13 @@ Rgb hsv_to_rgb(float h, float s, float v) {
 }
 
 // Random overlapping rectangles, colours from `colour(rng)`: corners everywhere, no repetition.
+// Rectangle sides are side/max_div .. side/min_div texels.
 template <class ColourFn>
-scene::Texture random_rectangles(const std::string& name, int side, int count, uint32_t seed,
-                                 ColourFn colour) {
+scene::Texture random_rectangles(const std::string& name, int side, int count, uint32_t seed, ColourFn colour,
+                                 int min_div = 8, int max_div = 64) {
     std::mt19937 rng(seed);
     std::vector<Rgb> srgb(size_t(side) * size_t(side), colour(rng));
-    std::uniform_int_distribution<int> pos(0, side - 1), size(side / 64, side / 8);
+    std::uniform_int_distribution<int> pos(0, side - 1), size(side / max_div, side / min_div);
     for (int k = 0; k < count; ++k) {
         const int x0 = pos(rng), y0 = pos(rng), w = size(rng), h = size(rng);
         const Rgb c = colour(rng);
@@ -87,19 +88,27 @@ void add_quad(scene::Mesh& mesh, Vec3 origin, Vec3 edge_u, Vec3 edge_v, Vec2 uv0
 
 }  // namespace
 
-scene::Scene make_turntable_scene() {
+scene::Scene make_turntable_scene(bool rich_texture) {
     scene::Scene s;
     // The box: saturated oranges and reds of varying brightness (one hue band for the subject mask).
-    s.textures.push_back(random_rectangles("box", 768, 2500, 7, [](std::mt19937& rng) {
+    const auto box_colour = [](std::mt19937& rng) {
         std::uniform_real_distribution<float> h(5.0f, 40.0f), sat(0.6f, 1.0f), v(0.25f, 1.0f);
         return hsv_to_rgb(h(rng), sat(rng), v(rng));
-    }));
+    };
     // The floor: 2048 texels over 12 units, ~170 per unit, finer than the pixels that see it, so that the
     // floor near the camera stays sharp (SIFT finds nothing on a magnified, blurred texture).
-    s.textures.push_back(random_rectangles("floor", 2048, 16000, 11, [](std::mt19937& rng) {
+    const auto floor_colour = [](std::mt19937& rng) {
         std::uniform_real_distribution<float> h(180.0f, 240.0f), sat(0.0f, 0.15f), v(0.15f, 0.85f);
         return hsv_to_rgb(h(rng), sat(rng), v(rng));
-    }));
+    };
+    if (rich_texture) {
+        // Rectangles of 8-64 texels, twice the texel density: corners every few pixels at 540x960.
+        s.textures.push_back(random_rectangles("box", 2048, 60000, 7, box_colour, 32, 256));
+        s.textures.push_back(random_rectangles("floor", 4096, 250000, 11, floor_colour, 64, 512));
+    } else {
+        s.textures.push_back(random_rectangles("box", 768, 2500, 7, box_colour));
+        s.textures.push_back(random_rectangles("floor", 2048, 16000, 11, floor_colour));
+    }
     s.materials = {diffuse("box", 0), diffuse("floor", 1)};
 
     // A box 1.2 x 1.0 x 0.8 standing on the floor; each face its own sixth of the texture (3 x 2 atlas), so
@@ -169,7 +178,7 @@ Mat4 opengl_camera_to_world(const scene::Camera& cam) {
 
 void render_turntable_video(const TurntableSettings& st, const fs::path& folder, const fs::path& video) {
     fs::create_directories(folder);
-    scene::Scene s = make_turntable_scene();
+    scene::Scene s = make_turntable_scene(st.rich_texture);
     render::RenderOptions opt;
     opt.width = st.width;
     opt.height = st.height;

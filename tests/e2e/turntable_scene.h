@@ -25,10 +25,14 @@ struct TurntableSettings {
     double fov_y_deg = 45;
     int spp = 8;
     double fps = 24;
+    // A feature-rich variant for the poses benchmark (docs/benchmarks.md, "How fast COLMAP can be"): finer,
+    // denser rectangles on larger textures, so that SIFT finds thousands of corners per frame, as on the
+    // richly textured tabletop of issue 16. The CI test keeps the plain scene.
+    bool rich_texture = false;
 };
 
 // World +Y up (glTF), the box centred above the origin.
-scene::Scene make_turntable_scene();
+scene::Scene make_turntable_scene(bool rich_texture = false);
 
 // Frame k's camera on the spiral, looking at the box's centre.
 scene::Camera turntable_camera(const TurntableSettings& settings, int frame);

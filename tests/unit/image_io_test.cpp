@@ -119,6 +119,24 @@ TEST(ImageIoBadInput, EmptyAndTruncatedPng) {
     expect_error([&] { read_image(dir / "header.png"); }, {"header.png"});
 }
 
+TEST(ImageIo, SizeFromTheHeaderAlone) {
+    const fs::path dir = test::temp_dir();
+    write_png(dir / "f.png", Image(24, 10, 3));
+    const ImageSize size = read_image_size(dir / "f.png");
+    EXPECT_EQ(size.width, 24);
+    EXPECT_EQ(size.height, 10);
+    // The header is enough: a PNG cut after it still tells its size.
+    const std::string bytes = read_all(dir / "f.png");
+    test::write_file(dir / "cut.png", bytes.substr(0, 40));
+    EXPECT_EQ(read_image_size(dir / "cut.png").width, 24);
+    expect_error([&] { read_image_size(dir / "none.png"); }, {"none.png", "not found"});
+    test::write_file(dir / "empty.png", "");
+    expect_error([&] { read_image_size(dir / "empty.png"); }, {"empty.png"});
+    std::vector<unsigned char> row(40000 * 3, 0);
+    ASSERT_TRUE(stbi_write_png((dir / "wide.png").string().c_str(), 40000, 1, 3, row.data(), 40000 * 3));
+    expect_error([&] { read_image_size(dir / "wide.png"); }, {"wide.png", "40000x1", "limit"});
+}
+
 TEST(ImageIoBadInput, TruncatedExr) {
     const fs::path dir = test::temp_dir();
     Image img(32, 32, 3);
