@@ -10,7 +10,7 @@
 # finding: libFuzzer prints the sanitizer report and saves the input as build-san/fuzz/crash-* (reproduce with
 # build-san/fuzz/fuzz_TARGET FILE). Exits non-zero when any target found something. Prints each target's
 # executions and exec/s. NERFPT_JOBS sets build jobs. The campaign in docs/benchmarks.md:
-#   TMPDIR=/dev/shm NERFPT_FUZZ_RUNS=1000000 NERFPT_FUZZ_JOBS=2 scripts/fuzz.sh 14400
+#   NERFPT_FUZZ_RUNS=1000000 NERFPT_FUZZ_JOBS=1 nice scripts/fuzz.sh 14400
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 

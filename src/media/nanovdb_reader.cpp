@@ -40,6 +40,9 @@ MapD world_to_index(const GridT& grid) {
 
 // Lower case, as OpenVDB spells its value types ("float", "vec3s"), so messages read alike for both formats.
 std::string type_name(nanovdb::GridType type) {
+    // The type comes from the file: NanoVDB's toStr indexes its table with it unchecked (a fuzz finding).
+    if (uint32_t(type) >= uint32_t(nanovdb::GridType::End))
+        return "unknown (" + std::to_string(uint32_t(type)) + ")";
     std::string s = nanovdb::toStr(type);
     for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
     return s;

@@ -72,6 +72,13 @@ TEST(NanoVdbLayout, WholeFilePassesBrokenRecordsAreErrors) {
                                {path.string(), "segment 0: NanoVDB format version 31.0.0, this build reads"});
 
     b = bytes;
+    const uint32_t bad_type = 99;  // the record's grid type: NanoVDB's toStr read past its table (a fuzz finding)
+    std::memcpy(b.data() + k_record + 32, &bad_type, 4);
+    test::write_file(path, b);
+    test::expect_error_message([&] { load_volume_grid(path, {}); },
+                               {path.string(), "grid 'density' is a unknown (99) grid, expected float"});
+
+    b = bytes;
     b[14] = 1;  // the segment's codec: zip
     test::write_file(path, b);
     test::expect_error_message([&] { load_volume_grid(path, {}); }, {path.string(), "compressed"});
