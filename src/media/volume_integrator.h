@@ -157,6 +157,36 @@ NPT_HD NPT_INLINE void march_overlapping(const VolumeOnRay* rs, const int* activ
     }
 }
 
+// One NeRF sample: sigma (per model unit) scaled by the volume's density scale over the model-space step dt,
+// emitting its stored sRGB colour decoded to linear and scaled (nothing for shadow rays). Every sample stands
+// for a whole step: with the lattice offset uniform in [0,1) the expected number of samples in a segment of
+// length L is L / dt, so the expected optical depth is right at both ends. Shared with the GPU's NeRF pass
+// (render/gpu/nerf_segment_kernels.cu).
+NPT_HD NPT_INLINE void add_nerf_sample(Accumulator& acc, float sigma, Rgb srgb, float dt, float density_scale,
+                                       float emission_scale) {
+    const Rgb c = acc.with_emission
+                      ? Rgb(srgb_to_linear(srgb.x), srgb_to_linear(srgb.y), srgb_to_linear(srgb.z)) * emission_scale
+                      : Rgb(0.0f);
+    acc.add(sigma * density_scale, c, dt);
+}
+
+// The segment [ta, tb] of a world ray through a NeRF volume in model space: a ray from the segment's start with a
+// unit direction (*mray) and the segment's length in model units (*t_max), so the march's own box test and t_max
+// clip it to [ta, tb]. False for a degenerate or non-finite direction (nothing to march). Shared with the GPU's
+// NeRF pass, which gets the segment in this form (render/gpu/wavefront.h).
+NPT_HD NPT_INLINE bool nerf_model_segment(const VolumeView& v, const Ray& ray, float ta, float tb, Ray* mray,
+                                          float* t_max) {
+    const NerfVolumeView& n = v.nerf;
+    const Vec3 lo = v.world_to_local.apply(ray.o), ld = v.world_to_local.apply_vector(ray.d);
+    const Vec3 om = n.local_to_model.point(lo), dm = n.local_to_model.vector(ld);
+    const float len = length(dm);  // model units per unit of t
+    if (!(len > 0.0f) || !isfinite(len)) return false;
+    const Vec3 dir = dm / len;
+    *mray = Ray{om + dir * (ta * len), dir};
+    *t_max = (tb - ta) * len;
+    return true;
+}
+
 // A NeRF volume over [ta, tb] of the world ray: marched in model space through its occupancy grid, each sample
 // absorbing with sigma (per model unit, integrated over the model-space step, so the node's scale does not
 // change how opaque the object looks) and emitting its colour for the ray's own direction (view-dependent),
@@ -166,22 +196,12 @@ NPT_HD NPT_INLINE void march_overlapping(const VolumeOnRay* rs, const int* activ
 NPT_HD NPT_INLINE void march_nerf(const VolumeView& v, const Ray& ray, float ta, float tb, float xi,
                                   Accumulator& acc) {
     const NerfVolumeView& n = v.nerf;
-    const Vec3 lo = v.world_to_local.apply(ray.o), ld = v.world_to_local.apply_vector(ray.d);
-    const Vec3 om = n.local_to_model.point(lo), dm = n.local_to_model.vector(ld);
-    const float len = length(dm);  // model units per unit of t
-    if (!(len > 0.0f) || !isfinite(len)) return;
-    const Vec3 dir = dm / len;
-    // The model ray starts at ta, so the march's own box test and t_max clip it to [ta, tb].
-    const Ray mray{om + dir * (ta * len), dir};
+    Ray mray;
     nerf::MarchParams mp = n.march;
-    mp.t_max = (tb - ta) * len;
-    // Every sample stands for a whole step: with the lattice offset xi uniform in [0,1) the expected number of
-    // samples in a segment of length L is L / dt, so the expected optical depth is right at both ends.
+    if (!nerf_model_segment(v, ray, ta, tb, &mray, &mp.t_max)) return;
+    const Vec3 dir = mray.d;
     auto add = [&](float sigma, Rgb srgb, float dt) {
-        const Rgb c = acc.with_emission
-                          ? Rgb(srgb_to_linear(srgb.x), srgb_to_linear(srgb.y), srgb_to_linear(srgb.z)) * v.emission_scale
-                          : Rgb(0.0f);
-        acc.add(sigma * v.density_scale, c, dt);
+        add_nerf_sample(acc, sigma, srgb, dt, v.density_scale, v.emission_scale);
     };
 #if defined(__CUDACC__)  // both nvcc passes: the kernels are per sample
     nerf::march_ray_visit(mp, n.occupancy, mray, xi, [&](const nerf::MarchSample& s) {

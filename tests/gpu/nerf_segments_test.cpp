@@ -9,10 +9,8 @@
 #include <random>
 #include <vector>
 
-#include "core/transform.h"
-#include "media/placement.h"
 #include "media/volume_integrator.h"
-#include "nerf/nerf_model.h"
+#include "random_nerf_volume.h"
 #include "render/gpu/device_scene.h"
 #include "render/gpu/nerf_segments.h"
 #include "render/gpu/shared_math_check.h"
@@ -26,28 +24,13 @@ TEST(NerfSegments, MatchTheCpuIntegratorWithinFp16Rounding) {
     c.encoding.grid.log2_table_size = 14;
     c.encoding.finest_resolution = 128;
     c.occupancy.resolution = 32;
-    nerf::NerfModel model = nerf::create_model(c, 1.0f, nerf::ngp_world_to_model(0.33f, Vec3(0.5f)));
     std::mt19937 g(11);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    const nerf::NerfLayout layout = model.layout();
-    // Hash features large enough that density and colour vary along every ray, but not so large that every ray
-    // turns opaque at its first occupied cell.
-    for (size_t i = layout.grid_offset; i < layout.total; ++i) model.params[i] = 2.0f * u(g) - 1.0f;
-    std::vector<float> occ(model.occupancy.cell_count());
-    for (float& o : occ) o = u(g) < 0.5f ? 1.0f : 0.0f;  // empty cells to skip
-    model.occupancy.set_density(occ, 0.5f);
-
-    media::VolumeView v;
-    v.kind = media::VolumeKind::Nerf;
-    v.nerf.field = model.field();
-    v.nerf.occupancy = model.occupancy.view();
-    v.nerf.march = model.march_params();
-    v.nerf.local_to_model = nerf::local_to_model(Vec3(-1.0f), Vec3(1.0f), nerf::CropBox{});
+    // Features up to 1, not 2 as elsewhere: fewer segments turn opaque at their first occupied cell.
+    test::RandomNerfVolume nerf_volume(c, g, 1.0f, 0.5f);
+    media::VolumeView v = nerf_volume.view;
     v.density_scale = 0.3f;
     v.emission_scale = 1.5f;
-    v.world_to_local = media::affine_from(
-        (Mat4::translation(0.1, 0.2, -0.3) * Mat4::rotation_quat(0.2, 0.1, 0.3, 0.9) * Mat4::scale(0.7, 0.5, 0.6))
-            .inverse());
     const std::vector<media::VolumeView> host = {v};
     gpu::DeviceVolumes device(Span<const media::VolumeView>{host.data(), host.size()});
 
@@ -63,10 +46,9 @@ TEST(NerfSegments, MatchTheCpuIntegratorWithinFp16Rounding) {
     std::vector<int> kind(n);
     int queued = 0;
     for (int i = 0; i < n; ++i) {
-        const Vec3 origin{u(g) * 4 - 2, u(g) * 4 - 2, 3.0f};
-        const Vec3 target{0.1f + (u(g) - 0.5f), 0.2f + (u(g) - 0.5f), -0.3f + (u(g) - 0.5f)};
-        const Ray ray{origin, normalize(target - origin)};
-        const float t_end = i % 3 == 0 ? length(target - origin) : INFINITY;  // a surface inside the cube
+        float target_t = 0.0f;
+        const Ray ray = test::ray_into_random_nerf_volume(g, &target_t);
+        const float t_end = i % 3 == 0 ? target_t : INFINITY;  // a surface inside the cube
         const float xi = u(g);
         kind[i] = i % 4 == 0 ? 1 : 0;
         gpu::WavefrontPath& p = paths[i];
@@ -92,10 +74,12 @@ TEST(NerfSegments, MatchTheCpuIntegratorWithinFp16Rounding) {
     const std::vector<gpu::WavefrontPath> out = dev_paths.download();
     cudaStreamDestroy(stream);
 
-    // fp16 operands through five MLP layers: about 1e-3 relative per value, more where sigma's exponential
-    // amplifies the log-density's error; the CPU's own fp16 bound for the view renderer is in nerf_cuda_test.
-    // Required here: transmittance within 0.01 and radiance within 2% (+0.01) for 99% of the segments, and
-    // no segment off by more than 0.1 (an occupancy decision flipped by rounding moves one step's share).
+    // The only difference is fp16 rounding in the MLPs (2^-11 relative per operand). This network's outputs are small
+    // (random initial weights), so its errors are absolute and tiny: the first GPU run saw at most 5e-5. Required:
+    // transmittance within 2e-4 and radiance within 2e-4 + 0.1%, tighter than one march step's share here
+    // (sigma ~0.3 per model unit over sqrt(3)/1024: ~5e-4 in T), so a sample gained or lost, a wrong lattice offset
+    // or a shifted segment start fails. Up to 0.5% of the segments may differ more (a cell decision flipped by
+    // rounding of a position, as the per-thread test in shared_math_gpu_test sees), none by more than 0.1.
     int crossing = 0, outliers = 0, gross = 0;
     double worst = 0.0;
     for (int i = 0; i < n; ++i) {
@@ -105,11 +89,11 @@ TEST(NerfSegments, MatchTheCpuIntegratorWithinFp16Rounding) {
         const media::VolumeResult& r = cpu[i];
         if (r.transmittance < 0.9f) ++crossing;
         float err = std::fabs(t_gpu - r.transmittance);
-        bool ok = err <= 0.01f;
+        bool ok = err <= 2e-4f;
         for (int k = 0; k < 3; ++k) {
             const float d = std::fabs(l_gpu[k] - r.radiance[k]);
             err = std::max(err, d);
-            ok = ok && d <= 0.02f * std::fabs(r.radiance[k]) + 0.01f;
+            ok = ok && d <= 1e-3f * std::fabs(r.radiance[k]) + 2e-4f;
         }
         worst = std::max(worst, double(err));
         if (!ok && ++outliers <= 5)
@@ -117,10 +101,10 @@ TEST(NerfSegments, MatchTheCpuIntegratorWithinFp16Rounding) {
                         r.radiance.x, t_gpu, l_gpu.x);
         if (err > 0.1f) ++gross;
     }
-    std::printf("%d queued segments, %d crossing the medium, %d outside the 1%% / 2%% bounds, worst %.4f\n", queued,
-                crossing, outliers, worst);
+    std::printf("%d queued segments, %d crossing the medium, %d outside the bounds, worst difference %.2e\n",
+                queued, crossing, outliers, worst);
     EXPECT_GT(crossing, queued / 4);  // the segments do see the medium
-    EXPECT_LE(outliers, queued / 100);
+    EXPECT_LE(outliers, queued / 200);
     EXPECT_EQ(gross, 0);
 }
 

@@ -23,6 +23,7 @@
 #include "media/placement.h"
 #include "render/camera.h"
 #include "render/gpu/shared_math_check.h"
+#include "random_nerf_volume.h"
 #include "scene/scene.h"
 #include "test_support.h"
 
@@ -208,33 +209,17 @@ TEST(SharedMathGpu, NerfVolumeMatchesCpu) {
     c.encoding.grid.log2_table_size = 14;
     c.encoding.finest_resolution = 128;
     c.occupancy.resolution = 16;
-    nerf::NerfModel model = nerf::create_model(c, 1.0f, nerf::ngp_world_to_model(0.33f, Vec3(0.5f)));
     std::mt19937 g(5);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
-    const nerf::NerfLayout layout = model.layout();
-    // Hash features large enough that density and colour vary strongly along every ray.
-    for (size_t i = layout.grid_offset; i < layout.total; ++i) model.params[i] = 4.0f * u(g) - 2.0f;
-    std::vector<float> occ(model.occupancy.cell_count());
-    for (float& o : occ) o = u(g) < 0.6f ? 1.0f : 0.0f;  // some empty cells to skip
-    model.occupancy.set_density(occ, 0.5f);
-
-    media::VolumeView v;
-    v.kind = media::VolumeKind::Nerf;
-    v.nerf.field = model.field();
-    v.nerf.occupancy = model.occupancy.view();
-    v.nerf.march = model.march_params();
-    v.nerf.local_to_model = nerf::local_to_model(Vec3(-1.0f), Vec3(1.0f), nerf::CropBox{});
+    test::RandomNerfVolume nerf_volume(c, g, 2.0f, 0.6f);
+    media::VolumeView v = nerf_volume.view;
     v.density_scale = 0.3f;
-    v.world_to_local = media::affine_from(
-        (Mat4::translation(0.1, 0.2, -0.3) * Mat4::rotation_quat(0.2, 0.1, 0.3, 0.9) * Mat4::scale(0.7, 0.5, 0.6))
-            .inverse());
     std::vector<media::VolumeView> views = {v};
     std::vector<gpu::VolumeCase> cases;
     for (int i = 0; i < 2000; ++i) {
-        Vec3 origin{u(g) * 4 - 2, u(g) * 4 - 2, 3.0f};
-        Vec3 target{0.1f + (u(g) - 0.5f), 0.2f + (u(g) - 0.5f), -0.3f + (u(g) - 0.5f)};
-        Ray ray{origin, normalize(target - origin)};
-        cases.push_back({ray, i % 3 == 0 ? length(target - origin) : INFINITY, u(g), i % 5 == 0});
+        float target_t = 0.0f;
+        const Ray ray = test::ray_into_random_nerf_volume(g, &target_t);
+        cases.push_back({ray, i % 3 == 0 ? target_t : INFINITY, u(g), i % 5 == 0});
     }
     std::vector<media::VolumeResult> out = gpu::run_volume_cases(views, cases);
     ASSERT_EQ(out.size(), cases.size());

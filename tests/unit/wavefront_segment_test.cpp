@@ -9,10 +9,9 @@
 #include <cmath>
 #include <random>
 
-#include "core/srgb.h"
 #include "core/transform.h"
 #include "media/placement.h"
-#include "nerf/nerf_model.h"
+#include "random_nerf_volume.h"
 #include "render/gpu/wavefront.h"
 
 namespace npt {
@@ -27,10 +26,7 @@ media::VolumeResult march_query(const media::VolumeView& v, const gpu::NerfQuery
         float sigma = 0.0f;
         Rgb rgb(0.0f);
         v.nerf.field.query(s.position, q.ray.d, &sigma, &rgb);
-        const Rgb c = emission ? Rgb(srgb_to_linear(rgb.x), srgb_to_linear(rgb.y), srgb_to_linear(rgb.z)) *
-                                     v.emission_scale
-                               : Rgb(0.0f);
-        acc.add(sigma * v.density_scale, c, s.dt);
+        media::add_nerf_sample(acc, sigma, rgb, s.dt, v.density_scale, v.emission_scale);
         return !acc.done();
     });
     media::VolumeResult r;
@@ -39,34 +35,22 @@ media::VolumeResult march_query(const media::VolumeView& v, const gpu::NerfQuery
     return r;
 }
 
+// levels 4, features up to 2, half the cells occupied; scales other than 1 so that they are tested too.
 struct Fixture {
-    nerf::NerfModel model;
-    media::VolumeView nerf_volume;
+    std::mt19937 g{3};
+    test::RandomNerfVolume volume{config(), g, 2.0f, 0.5f};
+    media::VolumeView& nerf_volume = volume.view;
     Fixture() {
+        nerf_volume.density_scale = 0.4f;
+        nerf_volume.emission_scale = 1.3f;
+    }
+    static nerf::NerfConfig config() {
         nerf::NerfConfig c;
         c.encoding.grid.levels = 4;
         c.encoding.grid.log2_table_size = 12;
         c.encoding.finest_resolution = 64;
         c.occupancy.resolution = 16;
-        model = nerf::create_model(c, 1.0f, nerf::ngp_world_to_model(0.33f, Vec3(0.5f)));
-        std::mt19937 g(3);
-        std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-        const nerf::NerfLayout l = model.layout();
-        for (size_t i = l.grid_offset; i < l.total; ++i) model.params[i] = 2.0f * u(g);
-        std::vector<float> occ(model.occupancy.cell_count());
-        for (float& o : occ) o = u(g) > 0.0f ? 1.0f : 0.0f;
-        model.occupancy.set_density(occ, 0.5f);
-        media::VolumeView& v = nerf_volume;
-        v.kind = media::VolumeKind::Nerf;
-        v.nerf.field = model.field();
-        v.nerf.occupancy = model.occupancy.view();
-        v.nerf.march = model.march_params();
-        v.nerf.local_to_model = nerf::local_to_model(Vec3(-1.0f), Vec3(1.0f), nerf::CropBox{});
-        v.density_scale = 0.4f;
-        v.emission_scale = 1.3f;
-        v.world_to_local = media::affine_from(
-            (Mat4::translation(0.1, 0.2, -0.3) * Mat4::rotation_quat(0.2, 0.1, 0.3, 0.9) * Mat4::scale(0.7, 0.5, 0.6))
-                .inverse());
+        return c;
     }
 };
 
@@ -80,10 +64,9 @@ TEST(WavefrontSegment, AQueuedNerfSegmentMarchesToTheIntegratorsResult) {
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     int queued = 0, seen = 0;
     for (int i = 0; i < 300; ++i) {
-        const Vec3 origin{u(g) * 4 - 2, u(g) * 4 - 2, 3.0f};
-        const Vec3 target{0.1f + (u(g) - 0.5f), 0.2f + (u(g) - 0.5f), -0.3f + (u(g) - 0.5f)};
-        const Ray ray{origin, normalize(target - origin)};
-        const float t_end = i % 3 == 0 ? length(target - origin) : INFINITY;
+        float target_t = 0.0f;
+        const Ray ray = test::ray_into_random_nerf_volume(g, &target_t);
+        const float t_end = i % 3 == 0 ? target_t : INFINITY;
         const float xi = u(g);
         const bool shadow = i % 4 == 0;
         gpu::NerfQuery q;

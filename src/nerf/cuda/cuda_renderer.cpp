@@ -10,9 +10,7 @@
 #include "nerf/cuda/adam_kernels.h"
 #include "nerf/cuda/cuda_device.h"
 #include "nerf/cuda/fused_mlp.h"
-#include "nerf/cuda/hash_grid_kernels.h"
 #include "nerf/cuda/occupancy_bits.h"
-#include "nerf/cuda/occupancy_kernels.h"
 #include "nerf/cuda/render_kernels.h"
 
 namespace npt::nerf::cuda {
@@ -130,22 +128,8 @@ void CudaViewRenderer::Impl::run(const Camera& camera, const ViewOptions& option
             const NerfFieldView field(layout, params.data());
             render_field_fp32(field, slots, dirs.data(), m, slot_sigma.data(), slot_rgb.data(), stream);
         } else {
-            HashGridArgs h;
-            h.layout = layout;
-            h.positions = slot_pos.data();
-            h.count = slots.count;
-            h.capacity = capacity;
-            hash_encode(h, params.data() + layout.grid_offset, slot_enc.data(), stream);
-            MlpInferenceArgs a;
-            a.weights = mlp_half.data();
-            a.encoded = slot_enc.data();
-            a.sample_ray = slot_pixel.data();
-            a.ray_dir = dirs.data();
-            a.count = slots.count;
-            a.capacity = capacity;
-            a.sigma = slot_sigma.data();
-            a.rgb = slot_rgb.data();
-            mlp_inference(a, false, stream);
+            render_field_fp16(layout, params.data(), mlp_half.data(), slots, dirs.data(), capacity, slot_enc.data(),
+                              slot_sigma.data(), slot_rgb.data(), stream);
         }
         const int nxt = 1 - cur;
         cuda_check(cudaMemsetAsync(counts.data() + nxt, 0, sizeof(uint32_t), stream), "cudaMemsetAsync");

@@ -4,6 +4,9 @@
 
 #include "core/cuda/device_buffer.h"
 #include "core/cuda/warp_lists.cuh"
+#include "nerf/cuda/fused_mlp.h"
+#include "nerf/cuda/hash_grid_kernels.h"
+#include "nerf/cuda/march_slots.cuh"
 
 namespace npt::nerf::cuda {
 
@@ -41,29 +44,14 @@ __global__ void __launch_bounds__(k_block) march_kernel(RenderFrame f, const uin
     const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
     const bool live = a < n;
     const uint32_t pixel = live ? alive[a] : 0u;
-    RenderRay* r = live ? &f.rays[pixel] : nullptr;
-    int j = 0;
+    MarchCursor c;
+    Ray ray{};
     if (live) {
-        float4* mine = slots.scratch + size_t(a) * size_t(k);
-        const Ray ray = r->ray;
-        MarchCursor c = r->cursor;  // in registers while marching
-        march_continue(f.march, f.grid, ray, c, [&](const MarchSample& s) {
-            mine[j++] = make_float4(s.position.x, s.position.y, s.position.z, s.dt);
-            return j < k;
-        });
-        r->cursor = c;
+        c = f.rays[pixel].cursor;  // in registers while marching
+        ray = f.rays[pixel].ray;
     }
-    const uint32_t base = gpu::warp_reserve(uint32_t(j), slots.count);
-    if (!live) return;
-    const float4* mine = slots.scratch + size_t(a) * size_t(k);
-    for (int q = 0; q < j; ++q) {
-        const float4 v = mine[q];
-        slots.pos[base + q] = Vec3(v.x, v.y, v.z);
-        slots.dt[base + q] = v.w;
-        slots.pixel[base + q] = pixel;
-    }
-    slots.first[a] = base;
-    slots.used[a] = uint8_t(j);
+    march_into_slots(live, a, pixel, f.march, f.grid, ray, c, k, slots);
+    if (live) f.rays[pixel].cursor = c;
 }
 
 __global__ void __launch_bounds__(k_block) field_fp32_kernel(NerfFieldView field, RenderSlots slots,
@@ -134,6 +122,27 @@ void render_field_fp32(const NerfFieldView& field, const RenderSlots& slots, con
     if (capacity == 0) return;
     field_fp32_kernel<<<std::min(blocks_for(capacity), 132u * 16u), k_block, 0, s>>>(field, slots, dirs, sigma, rgb);
     NPT_CUDA_CHECK_LAUNCH("render field_fp32_kernel");
+}
+
+void render_field_fp16(const NerfLayout& layout, const float* params, const __half* mlp_half,
+                       const RenderSlots& slots, const Vec3* dirs, uint32_t capacity, __half* encoded, float* sigma,
+                       Rgb* rgb, cudaStream_t s) {
+    HashGridArgs h;
+    h.layout = layout;
+    h.positions = slots.pos;
+    h.count = slots.count;
+    h.capacity = capacity;
+    hash_encode(h, params + layout.grid_offset, encoded, s);
+    MlpInferenceArgs a;
+    a.weights = mlp_half;
+    a.encoded = encoded;
+    a.sample_ray = slots.pixel;
+    a.ray_dir = dirs;
+    a.count = slots.count;
+    a.capacity = capacity;
+    a.sigma = sigma;
+    a.rgb = rgb;
+    mlp_inference(a, false, s);
 }
 
 void render_composite(const RenderFrame& f, const uint32_t* alive, uint32_t n, int k, RenderSlots slots,

@@ -37,7 +37,7 @@ struct RenderFrame {
 struct RenderSlots {              // the samples of a round, packed (each live ray reserves what it marched)
     Vec3* pos = nullptr;
     float* dt = nullptr;
-    uint32_t* pixel = nullptr;    // the owner's pixel (index into dirs)
+    uint32_t* pixel = nullptr;    // the owner's pixel, or segment (index into the directions the MLP reads)
     uint32_t* first = nullptr;    // per live ray: its first sample this round
     uint8_t* used = nullptr;      // per live ray: samples this round (<= K)
     uint32_t* count = nullptr;    // device: samples this round (zero before the march)
@@ -55,6 +55,12 @@ void render_march(const RenderFrame& f, const uint32_t* alive, uint32_t n, int k
 // (*slots.count of them; `capacity` bounds the launch).
 void render_field_fp32(const NerfFieldView& field, const RenderSlots& slots, const Vec3* dirs, uint32_t capacity,
                        float* sigma, Rgb* rgb, cudaStream_t s);
+// The fused evaluation (hash_encode, then the fp16 tensor-core MLPs: fused_mlp.h) on the round's samples, with
+// colour: `params` the model's fp32 parameters, `mlp_half` its fp16 MLP weights, `encoded` capacity x 32 halves
+// of scratch.
+void render_field_fp16(const NerfLayout& layout, const float* params, const __half* mlp_half,
+                       const RenderSlots& slots, const Vec3* dirs, uint32_t capacity, __half* encoded, float* sigma,
+                       Rgb* rgb, cudaStream_t s);
 // Composites the round's samples; rays that go on are appended to next (count in *next_count, zero before).
 void render_composite(const RenderFrame& f, const uint32_t* alive, uint32_t n, int k, RenderSlots slots,
                       const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s);

@@ -2,7 +2,7 @@
 
 #include "core/cuda/device_buffer.h"
 #include "core/cuda/warp_lists.cuh"
-#include "core/srgb.h"
+#include "nerf/cuda/march_slots.cuh"
 
 namespace npt::gpu {
 
@@ -69,38 +69,24 @@ __global__ void __launch_bounds__(k_block) start_kernel(NerfSegmentModel m, Wave
 
 __global__ void __launch_bounds__(k_block) march_kernel(NerfSegmentModel m, SegmentState* states,
                                                          const uint32_t* live, uint32_t n, int k,
-                                                         SegmentSamples samples) {
+                                                         nerf::cuda::RenderSlots samples) {
     const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
     const bool in = a < n;
     const uint32_t j = in ? live[a] : 0u;
-    int used = 0;
-    float4* mine = samples.scratch + size_t(a) * size_t(k);
+    nerf::MarchCursor c;
+    Ray ray{};
     if (in) {
-        SegmentState& s = states[j];
-        const Ray ray = s.ray;
-        nerf::MarchCursor c = s.cursor;  // in registers while marching
-        nerf::march_continue(m.march, m.grid, ray, c, [&](const nerf::MarchSample& x) {
-            mine[used++] = make_float4(x.position.x, x.position.y, x.position.z, x.dt);
-            return used < k;
-        });
-        s.cursor = c;
+        c = states[j].cursor;  // in registers while marching
+        ray = states[j].ray;
     }
-    const uint32_t base = warp_reserve(uint32_t(used), samples.count);
-    if (!in) return;
-    for (int q = 0; q < used; ++q) {
-        const float4 v = mine[q];
-        samples.pos[base + q] = Vec3(v.x, v.y, v.z);
-        samples.dt[base + q] = v.w;
-        samples.owner[base + q] = j;
-    }
-    samples.first[a] = base;
-    samples.used[a] = uint8_t(used);
+    nerf::cuda::march_into_slots(in, a, j, m.march, m.grid, ray, c, k, samples);
+    if (in) states[j].cursor = c;
 }
 
 __global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, WavefrontPath* paths,
                                                              const uint32_t* list, SegmentState* states,
                                                              const uint32_t* live, uint32_t n,
-                                                             SegmentSamples samples, const float* sigma,
+                                                             nerf::cuda::RenderSlots samples, const float* sigma,
                                                              const Rgb* rgb, uint32_t* next, uint32_t* next_count) {
     const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
     bool go_on = false;
@@ -116,14 +102,9 @@ __global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, 
         acc.with_emission = kind == 0;
         const uint32_t base = samples.first[a];
         const int used = samples.used[a];
-        for (int q = 0; q < used && !acc.done(); ++q) {
-            Rgb c(0.0f);
-            if (acc.with_emission) {
-                const Rgb srgb = rgb[base + q];
-                c = Rgb(srgb_to_linear(srgb.x), srgb_to_linear(srgb.y), srgb_to_linear(srgb.z)) * m.emission_scale;
-            }
-            acc.add(sigma[base + q] * m.density_scale, c, samples.dt[base + q]);
-        }
+        for (int q = 0; q < used && !acc.done(); ++q)
+            media::add_nerf_sample(acc, sigma[base + q], rgb[base + q], samples.dt[base + q], m.density_scale,
+                                   m.emission_scale);
         if (acc.done() || s.cursor.done(m.march)) {
             write_result(paths[segment_path(list[j])], kind, acc.radiance, acc.done() ? 0.0f : expf(acc.log_t));
         } else {
@@ -152,14 +133,14 @@ void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32
 }
 
 void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
-                   const SegmentSamples& samples, cudaStream_t s) {
+                   const nerf::cuda::RenderSlots& samples, cudaStream_t s) {
     if (n == 0) return;
     march_kernel<<<blocks_for(n), k_block, 0, s>>>(m, states, live, n, k, samples);
     NPT_CUDA_CHECK_LAUNCH("segment march_kernel");
 }
 
 void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,
-                       const uint32_t* live, uint32_t n, const SegmentSamples& samples, const float* sigma,
+                       const uint32_t* live, uint32_t n, const nerf::cuda::RenderSlots& samples, const float* sigma,
                        const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s) {
     if (n == 0) return;
     composite_kernel<<<blocks_for(n), k_block, 0, s>>>(m, paths, list, states, live, n, samples, sigma, rgb,

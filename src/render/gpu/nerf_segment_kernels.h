@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "core/platform.h"
+#include "nerf/cuda/render_kernels.h"  // RenderSlots: the round's packed samples
 #include "render/gpu/nerf_segments.h"
 
 namespace npt::gpu {
@@ -20,15 +21,6 @@ struct SegmentState {
     Rgb radiance{0.0f};
 };
 
-struct SegmentSamples {          // the samples of a round, packed (each live segment reserves what it marched)
-    Vec3* pos = nullptr;
-    float* dt = nullptr;
-    uint32_t* owner = nullptr;   // per sample: the segment's index in its list (the MLP's direction index)
-    uint32_t* first = nullptr;   // per live segment: its first sample this round
-    uint8_t* used = nullptr;     // per live segment: samples this round (<= k)
-    uint32_t* count = nullptr;   // device: samples this round (zero before the march)
-    float4* scratch = nullptr;   // k per live segment: the march's own slots before packing
-};
 
 // A segment in a list: its path's index and which of the path's queries it is (kind 0: the volume ray, with
 // emission; 1: the shadow ray, attenuation only) in the top bit.
@@ -54,10 +46,10 @@ void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32
                    SegmentState* states, Vec3* dirs, uint32_t* live, uint32_t* live_count, cudaStream_t s);
 // Up to k samples for each of the n live segments.
 void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
-                   const SegmentSamples& samples, cudaStream_t s);
+                   const nerf::cuda::RenderSlots& samples, cudaStream_t s);
 // Composites the round's samples; finished segments are written into their paths, the others appended to next.
 void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,
-                       const uint32_t* live, uint32_t n, const SegmentSamples& samples, const float* sigma,
+                       const uint32_t* live, uint32_t n, const nerf::cuda::RenderSlots& samples, const float* sigma,
                        const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s);
 
 }  // namespace npt::gpu

@@ -5,8 +5,8 @@
 
 #include "nerf/cuda/adam_kernels.h"
 #include "nerf/cuda/fused_mlp.h"
-#include "nerf/cuda/hash_grid_kernels.h"
 #include "nerf/cuda/occupancy_bits.h"
+#include "nerf/cuda/render_kernels.h"
 #include "render/gpu/nerf_segment_kernels.h"
 
 namespace npt::gpu {
@@ -17,7 +17,7 @@ namespace {
 // evaluated past the point where a segment turns opaque), a short one (later bounces) with up to 128, so it
 // ends in a round or two instead of a handful of nearly empty ones, each with a synchronisation.
 constexpr int k_min_first_round = 8;
-constexpr int k_max_round = 128;  // SegmentSamples::used is 8 bits
+constexpr int k_max_round = 128;  // RenderSlots::used is 8 bits
 constexpr uint32_t k_round_samples = 1u << 22;
 // The sample buffers: 8 per path of a wave, between 4 and 16 million (about 120 bytes each).
 constexpr size_t k_min_samples = size_t(1) << 22, k_max_samples = size_t(1) << 24;
@@ -154,7 +154,7 @@ void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
     cuda_check(cudaMemsetAsync(live_count, 0, 2 * sizeof(uint32_t), m_stream), "cudaMemsetAsync");
     segment_start(m, paths, list, n, b.states.data(), b.dirs.data(), b.live[0].data(), live_count, m_stream);
     uint32_t live = read(live_count);
-    SegmentSamples samples{b.pos.data(), b.dt.data(), b.owner.data(), b.first.data(), b.used.data(), sample_count,
+    const nerf::cuda::RenderSlots samples{b.pos.data(), b.dt.data(), b.owner.data(), b.first.data(), b.used.data(), sample_count,
                            b.scratch.data()};
     const uint32_t capacity = uint32_t(b.samples);
     int cur = 0;
@@ -163,24 +163,10 @@ void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / live)));
         cuda_check(cudaMemsetAsync(sample_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
         segment_march(m, b.states.data(), b.live[cur].data(), live, kk, samples, m_stream);
-        nerf::cuda::HashGridArgs h;
-        h.layout = m.layout;
-        h.positions = b.pos.data();
-        h.count = sample_count;
-        h.capacity = capacity;
-        nerf::cuda::hash_encode(h, m.params + m.layout.grid_offset, b.encoded.data(), m_stream);
-        nerf::cuda::MlpInferenceArgs a;
-        a.weights = m.mlp_half;
-        a.encoded = b.encoded.data();
-        a.sample_ray = b.owner.data();
-        a.ray_dir = b.dirs.data();
-        a.count = sample_count;
-        a.capacity = capacity;
-        a.sigma = b.sigma.data();
-        a.rgb = b.rgb.data();
         // With colour for every sample: the shadow segments' colour is not needed, but evaluating both kinds in
         // the same rounds halves the rounds (and their synchronisations).
-        nerf::cuda::mlp_inference(a, false, m_stream);
+        nerf::cuda::render_field_fp16(m.layout, m.params, m.mlp_half, samples, b.dirs.data(), capacity,
+                                      b.encoded.data(), b.sigma.data(), b.rgb.data(), m_stream);
         const int nxt = 1 - cur;
         uint32_t* next_count = b.counts.data() + 1 + nxt;
         cuda_check(cudaMemsetAsync(next_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");

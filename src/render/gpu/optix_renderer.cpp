@@ -8,8 +8,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
-#include <exception>
-#include <future>
 #include <string>
 
 #include "core/cuda/device_buffer.h"
@@ -56,11 +54,6 @@ static bool use_wavefront() {
     return !(v && std::string(v) == "0");
 }
 
-// Waves of the wavefront form that run side by side, each on its share of the image (optix_wavefront.h). One:
-// two were measured no faster on h200 (the NeRF demo at 1080p 39.7 against 41.5 frames/s, NeRF only at 800x800
-// 180 against 205: the GPU is busy, not waiting on the pass's synchronisations; docs/benchmarks.md).
-constexpr int k_waves_in_flight = 1;
-
 // Sample slots for an image of `pixels`: enough threads per launch to fill the GPU, at most spp.
 static uint32_t slots_for(size_t pixels, uint32_t spp) {
     return uint32_t(std::clamp<size_t>((k_threads_per_launch + pixels - 1) / pixels, 1,
@@ -74,14 +67,9 @@ struct OptixRenderer::State {
           programs(ctx.get(), accel.input_meshes()) {
         if (use_wavefront() && data.view().volumes.size > 0) {
             const size_t pixels = size_t(w) * size_t(h);
-            const size_t paths = WavefrontLoop::wave_paths(pixels, slots_for(pixels, k_max_slots), k_waves_in_flight);
-            for (int i = 0; i < k_waves_in_flight; ++i) {
-                wavefronts.push_back(std::make_unique<WavefrontLoop>(data.view().volumes, dev.view().volumes, paths));
-                if (!wavefronts.back()->useful()) {
-                    wavefronts.clear();
-                    break;
-                }
-            }
+            wavefront = std::make_unique<WavefrontLoop>(data.view().volumes, dev.view().volumes,
+                                                        pixels * slots_for(pixels, k_max_slots), stream.s);
+            if (!wavefront->useful()) wavefront.reset();
         }
     }
     int width, height;
@@ -91,7 +79,7 @@ struct OptixRenderer::State {
     StreamOwner stream;
     OptixAccel accel;
     OptixPrograms programs;
-    std::vector<std::unique_ptr<WavefrontLoop>> wavefronts;  // empty: the per-thread form
+    std::unique_ptr<WavefrontLoop> wavefront;  // null: the per-thread form
     // Kept from frame to frame (an allocation and a free cost more than a 1080p frame of the baked demo).
     DeviceBuffer<float4> accum;
     DeviceBuffer<float> rgb;
@@ -150,7 +138,7 @@ Image OptixRenderer::render(const render::RenderOptions& options, const render::
 
     const uint64_t total = uint64_t(pixels) * spp;
     uint32_t done = 0, batch = slots;  // the first launch: one sample per slot
-    if (!m->wavefronts.empty()) {
+    if (m->wavefront) {
         if (denoised) {
             // The guides only: the per-thread program with no samples writes them (sample_begin 0, slot 0).
             p.sample_begin = p.sample_count = 0;
@@ -159,32 +147,10 @@ Image OptixRenderer::render(const render::RenderOptions& options, const render::
                                     &m->programs.sbt(), unsigned(width), unsigned(height), 1),
                         "optixLaunch");
         }
-        // The waves' streams start from cleared sums (and guides that are written).
-        cuda_check(cudaStreamSynchronize(stream), "rendering with OptiX");
-        const size_t n_waves = m->wavefronts.size();
         for (; done < spp; done += batch) {
             batch = std::min(slots, spp - done);
             p.sample_begin = done;
-            // Each wave its part of the image, from its own host thread (the pass blocks on its counts).
-            std::vector<std::future<void>> others;
-            for (size_t k = 1; k < n_waves; ++k)
-                others.push_back(std::async(std::launch::async, [&, k] {
-                    m->wavefronts[k]->run_wave(p, batch, uint32_t(k), uint32_t(n_waves), m->programs);
-                }));
-            std::exception_ptr failed;
-            try {
-                m->wavefronts[0]->run_wave(p, batch, 0, uint32_t(n_waves), m->programs);
-            } catch (...) {
-                failed = std::current_exception();
-            }
-            for (auto& f : others) {
-                try {
-                    f.get();
-                } catch (...) {
-                    if (!failed) failed = std::current_exception();
-                }
-            }
-            if (failed) std::rethrow_exception(failed);
+            m->wavefront->run_wave(p, batch, m->programs, params.data());
             if (progress) progress(uint64_t(pixels) * (done + batch), total);
         }
     }

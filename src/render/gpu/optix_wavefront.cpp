@@ -2,7 +2,6 @@
 
 #include <optix.h>
 #include <optix_stubs.h>
-
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -10,49 +9,28 @@
 #include <string>
 
 #include "core/error.h"
-
 #include "render/gpu/optix_context.h"
 #include "render/gpu/optix_pipeline.h"
 
 namespace npt::gpu {
 
-WavefrontLoop::Stream::Stream() { cuda_check(cudaStreamCreateWithFlags(&s, cudaStreamNonBlocking), "cudaStreamCreate"); }
-WavefrontLoop::Stream::~Stream() { cudaStreamDestroy(s); }
-
 WavefrontLoop::WavefrontLoop(Span<const media::VolumeView> host, Span<const media::VolumeView> device,
-                             size_t max_paths)
-    : m_stream(m_stream_owner.s), m_pass(host, device, max_paths, m_stream_owner.s) {
+                             size_t max_paths, cudaStream_t stream)
+    : m_stream(stream), m_pass(host, device, max_paths, stream) {
     if (!m_pass.any()) return;
     m_paths.allocate(max_paths, "the path states", "--res or --spp");
     m_active[0].allocate(max_paths, "the path states", "--res or --spp");
     m_active[1].allocate(max_paths, "the path states", "--res or --spp");
 }
 
-WavefrontLoop::~WavefrontLoop() = default;
-
-// Every wave gets the same number of stripes (the last ones may lie past the image).
-static uint32_t stripes_per_wave(size_t pixels, uint32_t wave_count) {
-    const size_t stripes = (pixels + k_wave_stripe - 1) / k_wave_stripe;
-    return uint32_t((stripes + wave_count - 1) / wave_count);
-}
-
-size_t WavefrontLoop::wave_paths(size_t pixels, uint32_t slots, uint32_t wave_count) {
-    return size_t(stripes_per_wave(pixels, wave_count)) * k_wave_stripe * slots;
-}
-
-void WavefrontLoop::run_wave(LaunchParams p, uint32_t slots, uint32_t wave_index, uint32_t wave_count,
-                             const OptixPrograms& programs) {
-    const size_t pixels = size_t(p.width) * size_t(p.height);
-    const uint32_t n = uint32_t(wave_paths(pixels, slots, wave_count));
+void WavefrontLoop::run_wave(LaunchParams p, uint32_t slots, const OptixPrograms& programs, LaunchParams* params) {
+    const uint32_t n = uint32_t(size_t(p.width) * size_t(p.height) * slots);
     if (n == 0) return;
-    if (n > m_paths.size()) throw Error("WavefrontLoop: a wave of " + std::to_string(n) + " paths, built for " +
-                                        std::to_string(m_paths.size()));
-    LaunchParams* params = m_params.data();
+    if (n > m_paths.size())
+        throw Error("WavefrontLoop: a wave of " + std::to_string(n) + " paths, built for " +
+                    std::to_string(m_paths.size()));
     p.wave.paths = m_paths.data();
     p.wave.nerf_slot = m_pass.nerf_slots();
-    p.wave.wave_index = wave_index;
-    p.wave.wave_count = wave_count;
-    p.wave.stripes = stripes_per_wave(pixels, wave_count);
     p.sample_count = slots;
     auto launch = [&](const uint32_t* active, uint32_t count) {
         p.wave.active = active;

@@ -50,24 +50,15 @@ struct WavefrontPath {
     PathPhase phase = PathPhase::Done;
 };
 
-// Which volumes the NeRF pass takes: per scene volume, its slot in the pass, or k_no_query (grids, and NeRFs
-// the pass cannot evaluate; these are integrated inline).
+// A wave of paths: every pixel, `slots` samples each (path i is sample sample_begin + i / pixels of pixel
+// i % pixels).
 struct WavefrontParams {
     WavefrontPath* paths = nullptr;
     const uint32_t* active = nullptr;  // the paths of this launch; null in the first launch of a wave
-    const uint32_t* nerf_slot = nullptr;  // per scene volume
-    // The wave's pixels: several waves run side by side (optix_wavefront.h), wave k of n taking every n-th run
-    // of k_wave_stripe pixels from the k-th, so that each has its share of every part of the image. `stripes`:
-    // the runs of this wave (a path of a new wave is pixel-in-wave + stripes * k_wave_stripe * slot).
-    uint32_t wave_index = 0, wave_count = 1, stripes = 0;
+    // Which volumes the NeRF pass takes: per scene volume, its slot in the pass, or k_no_query (grids, and NeRFs
+    // the pass cannot evaluate; these are integrated inline).
+    const uint32_t* nerf_slot = nullptr;
 };
-
-constexpr uint32_t k_wave_stripe = 32;  // a warp's pixels
-
-// The pixel of a wave's local index (WavefrontParams), past the image's last pixel for a last stripe's tail.
-NPT_HD NPT_INLINE uint32_t wave_pixel(const WavefrontParams& w, uint32_t local) {
-    return ((local / k_wave_stripe) * w.wave_count + w.wave_index) * k_wave_stripe + local % k_wave_stripe;
-}
 
 // The volumes of `volumes` on [t_begin, t_end] of `ray`: when exactly one volume lies there and it is a NeRF the
 // pass evaluates, the segment is left in *q for the pass (true); otherwise it is integrated here into *vol
@@ -90,24 +81,11 @@ NPT_HD NPT_INLINE bool volume_segment(Span<const media::VolumeView> volumes, con
         t1 = b;
     }
     q->slot = k_no_query;
-    if (count == 0) {
-        *vol = media::VolumeResult{};
-        return false;
-    }
+    *vol = media::VolumeResult{};
+    if (count == 0) return false;
     if (count == 1 && volumes[only].kind == media::VolumeKind::Nerf && nerf_slot[only] != k_no_query) {
-        // march_nerf's model-space ray (volume_integrator.h), handed over instead of marched here.
-        const media::VolumeView& v = volumes[only];
-        const media::NerfVolumeView& n = v.nerf;
-        const Vec3 lo = v.world_to_local.apply(ray.o), ld = v.world_to_local.apply_vector(ray.d);
-        const Vec3 om = n.local_to_model.point(lo), dm = n.local_to_model.vector(ld);
-        const float len = length(dm);
-        if (!(len > 0.0f) || !isfinite(len)) {
-            *vol = media::VolumeResult{};
-            return false;
-        }
-        const Vec3 dir = dm / len;
-        q->ray = Ray{om + dir * (t0 * len), dir};
-        q->t_max = (t1 - t0) * len;
+        // march_nerf's segment (volume_integrator.h), handed over instead of marched here.
+        if (!media::nerf_model_segment(volumes[only], ray, t0, t1, &q->ray, &q->t_max)) return false;
         q->xi = xi;
         q->slot = nerf_slot[only];
         return true;

@@ -129,16 +129,11 @@ extern "C" __global__ void __raygen__wavefront() {
     const gpu::WavefrontParams& w = params.wave;
     const OptixTracer tracer;
     if (!w.active) {
-        // A new wave: path i is sample sample_begin + i / locals of the wave's pixel i % locals.
-        const uint32_t locals = w.stripes * gpu::k_wave_stripe;
+        // A new wave: path i is sample sample_begin + i / pixels of pixel i % pixels.
+        const uint32_t pixels = uint32_t(params.width) * uint32_t(params.height);
         gpu::WavefrontPath p;
-        p.pixel = gpu::wave_pixel(w, i % locals);
-        p.slot = i / locals;
-        if (p.pixel >= uint32_t(params.width) * uint32_t(params.height)) {  // past the last pixel: no path
-            p.phase = gpu::PathPhase::Done;
-            w.paths[i] = p;
-            return;
-        }
+        p.pixel = i % pixels;
+        p.slot = i / pixels;
         const uint32_t x = p.pixel % uint32_t(params.width), y = p.pixel / uint32_t(params.width);
         SobolSampler sampler(params.seed, x, y, params.sample_begin + p.slot);
         p.ray = render::generate_camera_ray(params.scene.camera, int(x), int(y), sampler.next_2d());
@@ -167,14 +162,14 @@ extern "C" __global__ void __raygen__wavefront() {
         if (shadow.pending) {
             p.shadow_t = 1.0f;
             p.shadow_contribution = shadow.contribution;
-            const bool queued = params.scene.volumes.size > 0 &&
-                                gpu::volume_segment(params.scene.volumes, w.nerf_slot, shadow.ray, 0.0f, shadow.tmax,
-                                                    shadow.xi, true, &p.query[1], &p.vol);
-            // Not queued: p.vol holds the inline result (it is not needed any more: path_add_volume used it).
-            if (queued)
-                p.shadow_pending = true;
+            media::VolumeResult in_place;
+            if (params.scene.volumes.size == 0)
+                p.st.radiance += shadow.contribution;
+            else if (gpu::volume_segment(params.scene.volumes, w.nerf_slot, shadow.ray, 0.0f, shadow.tmax,
+                                         shadow.xi, true, &p.query[1], &in_place))
+                p.shadow_pending = true;  // its transmittance comes from the NeRF pass
             else
-                p.st.radiance += shadow.contribution * (params.scene.volumes.size > 0 ? p.vol.transmittance : 1.0f);
+                p.st.radiance += shadow.contribution * in_place.transmittance;
         }
         if (more) {
             p.ray = next;
