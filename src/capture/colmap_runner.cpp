@@ -164,7 +164,8 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
     std::error_code ec;
     if (!fs::is_directory(frames, ec)) throw Error(frames.string() + ": not a folder of frames");
     ColmapRun run;
-    run.frames = count_frames(frames);
+    const std::vector<std::string> names = list_frames(frames);
+    run.frames = names.size();
     if (run.frames < 3)
         throw Error(frames.string() + ": " + std::to_string(run.frames) +
                     " images (.png/.jpg); COLMAP needs at least 3, and a good capture 50-200");
@@ -178,7 +179,6 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
     fs::create_directories(work / "sparse", ec);
     // COLMAP reads every file of the folder otherwise (curate.json, the contact sheet).
     const fs::path list = work / "frames.txt";
-    const std::vector<std::string> names = list_frames(frames);
     {
         std::ofstream f(list);
         for (const auto& n : names) f << n << "\n";
@@ -186,8 +186,6 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
     }
     // One camera for all frames: the first frame's size decides the feature budget.
     const ImageSize size = read_image_size(frames / names.front());
-    run.frame_width = size.width;
-    run.frame_height = size.height;
     const ColmapStepOptions options = colmap_step_options(s, size.width, size.height);
     run.max_num_features = options.max_num_features;
 

@@ -52,7 +52,6 @@ struct ColmapRun {
     // when each started: wall time means something only on a quiet machine, CPU time everywhere.
     double cpu_seconds[3] = {0, 0, 0};
     double load_at_start[3] = {0, 0, 0};
-    int frame_width = 0, frame_height = 0;  // of the first frame (COLMAP's single camera)
     int max_num_features = 0;               // SIFT budget per frame (ColmapStepOptions)
 };
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "media/nanovdb_layout.h"
 
 namespace npt::media {
@@ -130,10 +131,8 @@ VolumeGrid read_nanovdb_grid(const std::filesystem::path& path, size_t max_voxel
         const size_t nx = size_t(int64_t(hi[0]) - lo[0] + 1), ny = size_t(int64_t(hi[1]) - lo[1] + 1),
                      nz = size_t(int64_t(hi[2]) - lo[2] + 1);
         // Each is at most 2^32: the product is compared in double (in size_t it wrapped to a small number).
-        if (double(nx) * double(ny) * double(nz) > double(max_voxels))
-            throw Error(where + ": grid 'density': active bounding box " + std::to_string(nx) + "x" +
-                        std::to_string(ny) + "x" + std::to_string(nz) + " is over the dense limit of " +
-                        std::to_string(max_voxels) + " voxels");
+        check_dense_size(where, "grid 'density': active bounding box", double(nx), double(ny), double(nz),
+                         max_voxels);
         const size_t n = nx * ny * nz;
 
         VolumeGrid g;
@@ -146,7 +145,12 @@ VolumeGrid read_nanovdb_grid(const std::filesystem::path& path, size_t max_voxel
         g.local_to_index.t =
             Vec3(float(dmap.b[0] - lo[0]), float(dmap.b[1] - lo[1]), float(dmap.b[2] - lo[2]));
 
-        g.density.resize(n);
+        with_memory_context(where + ": grid 'density': a dense " + std::to_string(nx) + "x" + std::to_string(ny) +
+                                "x" + std::to_string(nz) + " grid",
+                            double(n) * (4.0 + 12.0), "use a coarser grid", [&] {
+                                g.density.resize(n);
+                                g.color.reserve(n);  // density and colour together, or neither
+                            });
         auto dacc = density.getAccessor();
         for_each_voxel(lo, hi, [&](const nanovdb::Coord& c, size_t idx) {
             g.density[idx] = dacc.isActive(c) ? dacc.getValue(c) : 0.0f;

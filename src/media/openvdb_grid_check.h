@@ -15,7 +15,6 @@ namespace npt::media {
 // One grid as its descriptor gives it (openvdb_layout.cpp).
 struct VdbGridInfo {
     std::string name;
-    uint32_t file_version = 0;  // 222..225: per-grid compression, node-mask compression
     uint64_t value_size = 0;    // 4 (float) or 12 (vec3s)
     bool half = false;          // values stored as 16-bit floats (a "_HalfFloat" grid type)
     uint64_t grid_pos = 0, end_pos = 0;

@@ -70,7 +70,7 @@ void check_openvdb_layout(const std::string& where) {
         const uint64_t next = uint64_t(end_pos);
 
         if (name == "density" || name == "color") {
-            Wanted w{VdbGridInfo{name, version, 0, false, uint64_t(grid_pos), next}, type, parent};
+            Wanted w{VdbGridInfo{name, 0, false, uint64_t(grid_pos), next}, type, parent};
             wanted.insert(name == "density" ? wanted.begin() : wanted.end(), w);
         }
         r.seek(next);

@@ -102,12 +102,10 @@ VolumeGrid read_openvdb_grid(const std::filesystem::path& path, size_t max_voxel
         // In 64 bits: a box from -2^31 to 2^31 - 1 is 2^32 voxels wide, more than bbox.dim()'s int32.
         int64_t extent[3];
         for (int c = 0; c < 3; ++c) extent[c] = int64_t(bbox.max()[c]) - int64_t(bbox.min()[c]) + 1;
-        if (double(extent[0]) * double(extent[1]) * double(extent[2]) > double(max_voxels))
-            throw Error(where + ": grid 'density': active bounding box " + std::to_string(extent[0]) + "x" +
-                        std::to_string(extent[1]) + "x" + std::to_string(extent[2]) +
-                        " is over the dense limit of " + std::to_string(max_voxels) + " voxels");
-        const openvdb::Coord dim = bbox.dim();
-        const size_t n = size_t(dim.x()) * size_t(dim.y()) * size_t(dim.z());
+        check_dense_size(where, "grid 'density': active bounding box", double(extent[0]), double(extent[1]),
+                         double(extent[2]), max_voxels);
+        const openvdb::Coord dim{int(extent[0]), int(extent[1]), int(extent[2])};
+        const size_t n = size_t(extent[0]) * size_t(extent[1]) * size_t(extent[2]);
 
         VolumeGrid g;
         g.source = where;

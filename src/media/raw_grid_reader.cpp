@@ -59,13 +59,7 @@ VolumeGrid read_raw_grid(const std::filesystem::path& path, const GridLoadOption
     if (w == 0 || h == 0 || d == 0)
         throw Error(where + ": grid size " + std::to_string(w) + "x" + std::to_string(h) + "x" +
                     std::to_string(d) + " has a zero dimension");
-    // Each factor is checked before multiplying, so the product cannot overflow.
-    const size_t limit = std::min(options.max_voxels, k_max_dense_voxels);
-    if (w > limit || h > limit || d > limit ||
-        w * h > limit || w * h * d > limit)
-        throw Error(where + ": grid size " + std::to_string(w) + "x" + std::to_string(h) + "x" +
-                    std::to_string(d) + " is over the dense limit of " + std::to_string(limit) +
-                    " voxels");
+    check_dense_size(where, "grid size", double(w), double(h), double(d), options.max_voxels);  // clamped by the caller
     const size_t n = w * h * d;
     const Vec3 size = options.local_max - options.local_min;
     if (!(size.x > 0.0f && size.y > 0.0f && size.z > 0.0f))

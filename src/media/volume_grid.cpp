@@ -69,7 +69,17 @@ void pad_clamp_to_edge(VolumeGrid& g) {
 
 }  // namespace
 
-VolumeGrid load_volume_grid(const std::filesystem::path& path, const GridLoadOptions& options) {
+void check_dense_size(const std::string& where, const std::string& what, double nx, double ny, double nz,
+                      size_t max_voxels) {
+    if (nx * ny * nz <= double(max_voxels)) return;
+    auto dim = [](double v) { return std::to_string(uint64_t(v)); };
+    throw Error(where + ": " + what + " " + dim(nx) + "x" + dim(ny) + "x" + dim(nz) + " is over the dense limit of " +
+                std::to_string(max_voxels) + " voxels");
+}
+
+VolumeGrid load_volume_grid(const std::filesystem::path& path, const GridLoadOptions& requested) {
+    GridLoadOptions options = requested;
+    options.max_voxels = std::min(options.max_voxels, k_max_dense_voxels);
     const std::string where = path.string();
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) throw Error(where + ": volume grid file not found");
@@ -82,17 +92,17 @@ VolumeGrid load_volume_grid(const std::filesystem::path& path, const GridLoadOpt
     VolumeGrid g;
     try {
         if (ext == ".vdb")
-            g = read_openvdb_grid(path, std::min(options.max_voxels, k_max_dense_voxels));
+            g = read_openvdb_grid(path, options.max_voxels);
         else if (ext == ".nvdb")
-            g = read_nanovdb_grid(path, std::min(options.max_voxels, k_max_dense_voxels));
+            g = read_nanovdb_grid(path, options.max_voxels);
         else if (ext == ".bin")
             g = read_raw_grid(path, options);
         else
             throw Error(where + ": unknown volume grid extension '" + ext +
                         "' (expected .vdb, .nvdb or an instant-ngp {W}x{H}x{D}_*.bin)");
     } catch (const std::bad_alloc&) {
-        // The dense box is at most max_voxels (2^28 voxels by default, 4 GiB of density and colour).
-        throw Error(where + ": the grid's dense box (up to " + format_bytes(double(std::min(options.max_voxels, k_max_dense_voxels)) * 16.0) +
+        // The raw reader's dense box (the others say their own size): at most max_voxels, 2^28 by default.
+        throw Error(where + ": the grid's dense box (up to " + format_bytes(double(options.max_voxels) * 16.0) +
                     ") needs more memory than this machine could allocate: bake it with a smaller --res");
     }
     sanitize(g);

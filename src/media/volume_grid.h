@@ -33,6 +33,11 @@ struct GridLoadOptions {
     size_t max_voxels = k_max_dense_voxels;
 };
 
+// Throws "<where>: <what> NxxNyxNz is over the dense limit of <max_voxels> voxels" when the box has more voxels;
+// the product is taken in double, so no size (up to 2^32 per axis from a file) can wrap it. For the readers.
+void check_dense_size(const std::string& where, const std::string& what, double nx, double ny, double nz,
+                      size_t max_voxels);
+
 // Loads .vdb (OpenVDB), .nvdb (NanoVDB) or a raw instant-ngp grid ({W}x{H}x{D}_*.bin) by extension and name.
 // Negative or NaN densities are clamped to 0 with one warning per file. Throws npt::Error naming file and
 // field.

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/error.h"
@@ -48,7 +49,8 @@ TEST(ColmapRunner, BestIsColmapsOwnSettingsWithExplicitThreads) {
 TEST(ColmapRunner, ThreadsDefaultToTheHardware) {
     ColmapSettings s;  // threads 0
     const ColmapStepOptions o = colmap_step_options(s, 540, 960);
-    EXPECT_GE(std::stoi(value_of(o.extraction, "--SiftExtraction.num_threads")), 1);
+    EXPECT_EQ(value_of(o.extraction, "--SiftExtraction.num_threads"),
+              std::to_string(std::max(1, int(std::thread::hardware_concurrency()))));
     EXPECT_EQ(value_of(o.extraction, "--SiftExtraction.num_threads"),
               value_of(o.mapping, "--Mapper.num_threads"));
 }
