@@ -7,7 +7,7 @@
 # (GTEST_FILTER='*' runs every GPU test, not only the OptiX and shared-maths ones).
 set -uo pipefail
 # NERFPT_OPTIX_WAVEFRONT=0 / NERFPT_WAVEFRONT_STATS=1: the NeRF demo without and with the wavefront form's
-# breakdown (render/gpu/optix_wavefront.cpp).
+# breakdown (render/gpu/optix_wavefront.cpp); NERFPT_SEGMENT_WARP_BELOW=0: the NeRF pass without its warp rounds.
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_out}
 mkdir -p "$out"
@@ -30,6 +30,12 @@ echo "== per thread (NERFPT_OPTIX_WAVEFRONT=0)" | tee -a "$out/render_bench.log"
 NERFPT_OPTIX_WAVEFRONT=0 bench --res 1920x1080 --spp 1 --repeats 2 --frames 3 --scene-file $demo/scene.gltf
 NERFPT_WAVEFRONT_STATS=1 timeout 60 $bin/render_bench --backend optix --res 1920x1080 --spp 1 --repeats 1 --frames 3 \
     --scene-file $demo/scene.gltf 2>&1 | grep -E "wavefront|frames" | tee "$out/wavefront_stats.log"
+# The NeRF pass without its warp-per-segment rounds (every round a thread per segment), for the comparison.
+echo "== a thread per segment in every round (NERFPT_SEGMENT_WARP_BELOW=0)" | tee -a "$out/render_bench.log"
+NERFPT_SEGMENT_WARP_BELOW=0 bench --res 1920x1080 --spp 1 --repeats 2 --frames 20 --scene-file $demo/scene.gltf
+NERFPT_SEGMENT_WARP_BELOW=0 NERFPT_WAVEFRONT_STATS=1 timeout 60 $bin/render_bench --backend optix --res 1920x1080 \
+    --spp 1 --repeats 1 --frames 3 --scene-file $demo/scene.gltf 2>&1 | grep -E "wavefront" | sed 's/^/thread rounds only: /' |
+    tee -a "$out/wavefront_stats.log"
 # NeRF only (a volume cube, grey background) through the path tracer, and nerfpt view of the same model.
 bench --res 800x800 --spp 1 --repeats 3 --frames 50 --scene-file $demo/scene.json
 NERFPT_WAVEFRONT_STATS=1 timeout 60 $bin/render_bench --backend optix --res 800x800 --spp 1 --repeats 1 --frames 3 \

@@ -18,8 +18,9 @@
 namespace npt {
 namespace {
 
-TEST(NerfSegments, MatchTheCpuIntegratorWithinFp16Rounding) {
-    ASSERT_TRUE(gpu::device_available());
+// Runs the pass with `tuning` on 4000 random segments and compares each with integrate_volumes.
+void expect_pass_matches_cpu(const gpu::NerfPassTuning& tuning, const char* what) {
+    SCOPED_TRACE(what);
     nerf::NerfConfig c;  // the default network: the shape the fp16 kernels take
     c.encoding.grid.log2_table_size = 14;
     c.encoding.finest_resolution = 128;
@@ -39,6 +40,7 @@ TEST(NerfSegments, MatchTheCpuIntegratorWithinFp16Rounding) {
     ASSERT_EQ(cudaStreamCreate(&stream), cudaSuccess);
     gpu::NerfSegmentPass pass({host.data(), host.size()}, device.view(), size_t(n), stream);
     ASSERT_TRUE(pass.any());
+    pass.set_tuning(tuning);
     const uint32_t slot_of_volume[1] = {0};
 
     std::vector<gpu::WavefrontPath> paths(n);
@@ -101,11 +103,30 @@ TEST(NerfSegments, MatchTheCpuIntegratorWithinFp16Rounding) {
                         r.radiance.x, t_gpu, l_gpu.x);
         if (err > 0.1f) ++gross;
     }
-    std::printf("%d queued segments, %d crossing the medium, %d outside the bounds, worst difference %.2e\n",
-                queued, crossing, outliers, worst);
+    std::printf("%s: %d queued segments, %d crossing the medium, %d outside the bounds, worst difference %.2e (%s)\n",
+                what, queued, crossing, outliers, worst, pass.stats().c_str());
     EXPECT_GT(crossing, queued / 4);  // the segments do see the medium
     EXPECT_LE(outliers, queued / 200);
     EXPECT_EQ(gross, 0);
+}
+
+TEST(NerfSegments, MatchTheCpuIntegratorWithinFp16Rounding) {
+    ASSERT_TRUE(gpu::device_available());
+    expect_pass_matches_cpu(gpu::NerfPassTuning::defaults(), "defaults");
+}
+
+// Both forms of a round alone, with rounds of at most 16 samples so that most segments are marched in several
+// pieces (the cursor handed from round to round, the quota ending inside a warp's chunk of 32 points).
+TEST(NerfSegments, ThreadRoundsAndWarpRoundsEachMatchTheCpu) {
+    ASSERT_TRUE(gpu::device_available());
+    gpu::NerfPassTuning threads;
+    threads.warp_below = 0;
+    threads.max_round = threads.max_warp_round = 16;
+    expect_pass_matches_cpu(threads, "a thread per segment");
+    gpu::NerfPassTuning warps;
+    warps.warp_below = ~0u;
+    warps.max_round = warps.max_warp_round = 16;
+    expect_pass_matches_cpu(warps, "a warp per segment");
 }
 
 }  // namespace

@@ -104,6 +104,32 @@ TEST(OptixRender, ExampleSceneMatchesTheCpu) {
     expect_same_as_cpu(scene::load_scene(path), 160, 120, 64, 3, "example");
 }
 
+// render_frame (a viewer's frames, into the renderer's page-locked image) gives render's image bit for bit: the
+// same seed gives one image (the sample planes are added in a fixed order), whichever frame came before.
+TEST(OptixRender, FramesAreTheRendersImages) {
+    if (!render::optix_backend_built()) GTEST_SKIP() << "built without the OptiX backend";
+    const auto scene_path = test::shared_data() / "scenes" / "cornell" / "scene.gltf";
+    NPT_REQUIRE_SHARED(scene_path);
+    const scene::Scene scene = scene::load_scene(scene_path);
+    render::RenderOptions o;
+    o.width = 96;
+    o.height = 64;
+    o.spp = 4;
+    o.backend = "optix";
+    o = render::resolve_options(scene, o);
+    const auto renderer = render::prepare_renderer(scene, o);
+    o.seed = 3;
+    const Image once = renderer->render(o);
+    o.seed = 4;
+    const Image& frame = renderer->render_frame(o);
+    const Image other = frame;
+    o.seed = 3;
+    EXPECT_EQ(&renderer->render_frame(o), &frame);  // the same image, reused
+    ASSERT_EQ(frame.pixels.size(), once.pixels.size());
+    EXPECT_EQ(frame.pixels, once.pixels);
+    EXPECT_NE(other.pixels, once.pixels);  // seed 4 did render another image into it
+}
+
 // The model-in-scene demo (scripts/make_nerf_demo_scene.py: lego on a pedestal in a Cornell box beside a mirror
 // sphere): the NeRF queried directly in device code, and its 256^3 bake, against the CPU backend at the same
 // seeds, as the reference scenes above. The model is trained here on the GPU (15 s) and baked on the GPU.

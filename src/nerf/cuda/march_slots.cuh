@@ -34,3 +34,97 @@ __device__ __forceinline__ void march_into_slots(bool live, uint32_t a, uint32_t
 }
 
 }  // namespace npt::nerf::cuda
+
+namespace npt::nerf::cuda {
+
+// The same round for one ray per warp, for rays whose one-thread march would be a long dependent chain (the few
+// long segments left in a round's tail). Only for uniform steps (cone_angle 0): the lattice t0 + k dt is then
+// global, so lane l tests lattice point c.k + l and the warp finds 32 points' occupancy at once. The samples are
+// march_continue's — the lattice points in occupied cells, in order, at most k this round and mp.max_samples in
+// all — and where a chunk of 32 ends in an empty cell the march jumps on from its last point by the same rule as
+// march_continue's skip. (march_continue tests fewer points: a point within its skip's epsilon, a millionth of a
+// cell, past the exit of an empty cell is skipped there and tested here.) Every lane calls it with the same
+// arguments and cursor and leaves with the same cursor; lane 0 writes slots.first/used[a].
+__device__ __forceinline__ void warp_march_into_slots(uint32_t a, uint32_t owner, const MarchParams& mp,
+                                                      const OccupancyGridView& grid, const Ray& ray, MarchCursor& c,
+                                                      int k, const RenderSlots& slots) {
+    constexpr unsigned all = 0xffffffffu;
+    const int lane = int(threadIdx.x & 31);
+    const unsigned below = (1u << lane) - 1u;
+    float4* mine = slots.scratch + size_t(a) * size_t(k);
+    const float dt = march_step(mp, c.t0);
+    const float inv_dt = 1.0f / dt;
+    const Vec3 inv_d(ray.d.x != 0.0f ? 1.0f / ray.d.x : 0.0f, ray.d.y != 0.0f ? 1.0f / ray.d.y : 0.0f,
+                     ray.d.z != 0.0f ? 1.0f / ray.d.z : 0.0f);
+    int used = 0;
+    while (used < k && !c.done(mp)) {
+        const uint32_t kl = c.k + uint32_t(lane);
+        const float t = c.t0 + float(kl) * dt;
+        const float t_before = __shfl_up_sync(all, t, 1);
+        // A lattice that no longer advances in float (t huge against dt) stops the march, as in march_continue.
+        const bool advancing = lane == 0 || t > t_before;
+        const bool valid = t < c.t_far && advancing && kl >= c.k;
+        const Vec3 p = ray.at(t);
+        const int cas = valid ? march_cascade(grid, p, dt) : 0;
+        const bool occupied = valid && (!grid.has_occupancy() || grid.is_occupied(p, cas));
+        const unsigned invalid = __ballot_sync(all, !valid);
+        const int first_invalid = invalid ? __ffs(invalid) - 1 : 32;
+        const unsigned in_range = first_invalid == 32 ? all : (1u << first_invalid) - 1u;
+        const unsigned hits = __ballot_sync(all, occupied) & in_range;
+        const int found = __popc(hits);
+        const int room = min(k - used, mp.max_samples - c.count);
+        const int rank = __popc(hits & below);
+        if (occupied && (hits >> lane & 1u) && rank < room) mine[used + rank] = make_float4(p.x, p.y, p.z, dt);
+        if (found >= room) {
+            // The quota ends inside this chunk: the cursor stands after the room-th hit.
+            const unsigned last = __ballot_sync(all, (hits >> lane & 1u) && rank == room - 1);
+            used += room;
+            c.count += room;
+            c.k += uint32_t(__ffs(last));  // that lane + 1
+            c.t = c.t0 + float(c.k) * dt;
+            break;
+        }
+        used += found;
+        c.count += found;
+        if (invalid) {
+            // Past the end of the segment, or a lattice that stopped advancing.
+            c.k += uint32_t(first_invalid);
+            c.t = __shfl_sync(all, t, first_invalid);
+            if (c.t < c.t_far) c.stopped = true;
+            break;
+        }
+        // All 32 points tested: go on after them, or, where the last one is empty, from the far side of its
+        // empty cell (march_continue's skip).
+        float kn = float(c.k) + 32.0f;
+        if (lane == 31 && !occupied) {
+            const float cell = grid.cascade_size(cas) / float(grid.resolution);
+            const float eps = fmaxf(1e-6f * cell, 1e-6f * t);
+            const float skip_cell = grid.coarse_occupied(p, cas) ? cell : cell * float(OccupancyGridView::k_coarse);
+            const float target = t + march_distance_to_cell_exit(p, ray.d, inv_d, skip_cell) + eps;
+            kn = fmaxf(kn, march_lattice_next(c.t0, inv_dt, kl, target));
+        }
+        kn = __shfl_sync(all, kn, 31);
+        if (!(kn < 4.0e9f)) {  // beyond any lattice a ray can have
+            c.stopped = true;
+            break;
+        }
+        c.k = uint32_t(kn);
+        c.t = c.t0 + float(c.k) * dt;
+    }
+    __syncwarp();  // the lanes wrote `mine`; they copy it below in another order
+    uint32_t base = 0;
+    if (lane == 0 && used > 0) base = atomicAdd(slots.count, uint32_t(used));
+    base = __shfl_sync(all, base, 0);
+    for (int q = lane; q < used; q += 32) {
+        const float4 v = mine[q];
+        slots.pos[base + q] = Vec3(v.x, v.y, v.z);
+        slots.dt[base + q] = v.w;
+        slots.pixel[base + q] = owner;
+    }
+    if (lane == 0) {
+        slots.first[a] = base;
+        slots.used[a] = uint8_t(used);
+    }
+}
+
+}  // namespace npt::nerf::cuda

@@ -68,6 +68,7 @@ class OptixSceneRenderer final : public SceneRenderer {
     Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised) override {
         return m_renderer.render(resolved, progress, denoised);
     }
+    const Image& render_frame(const RenderOptions& resolved) override { return m_renderer.render_frame(resolved); }
 
   private:
     gpu::OptixRenderer m_renderer;

@@ -25,6 +25,15 @@ class SceneRenderer {
     // Renders `resolved` (its width and height must be the prepared ones); see render_with_backend.
     virtual Image render(const RenderOptions& resolved, const ProgressFn& progress = {},
                          Image* denoised = nullptr) = 0;
+    // The same render into a frame the renderer keeps (a viewer's or an animation's frames): OptiX downloads into
+    // page-locked memory it reuses instead of a new image. The reference holds until the next call.
+    virtual const Image& render_frame(const RenderOptions& resolved) {
+        m_frame = render(resolved);
+        return m_frame;
+    }
+
+  private:
+    Image m_frame;
 };
 std::unique_ptr<SceneRenderer> prepare_renderer(const scene::Scene& scene, const RenderOptions& resolved);
 

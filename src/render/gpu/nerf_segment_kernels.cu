@@ -11,6 +11,7 @@ namespace {
 constexpr int k_block = 128;
 
 unsigned blocks_for(uint32_t n) { return (n + k_block - 1) / k_block; }
+unsigned warp_blocks_for(uint32_t warps) { return (warps + k_block / 32 - 1) / (k_block / 32); }
 
 // The segment's result, where the path reads it.
 __device__ __forceinline__ void write_result(WavefrontPath& p, int kind, Rgb radiance, float transmittance) {
@@ -116,6 +117,89 @@ __global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, 
     warp_append(go_on, j, next, next_count);
 }
 
+// The warp forms of march and composite (one live segment per warp), for the rounds whose few long segments a
+// thread each would march and composite as long dependent chains.
+__global__ void __launch_bounds__(k_block) warp_march_kernel(NerfSegmentModel m, SegmentState* states,
+                                                              const uint32_t* live, uint32_t n, int k,
+                                                              nerf::cuda::RenderSlots samples) {
+    const uint32_t a = (blockIdx.x * blockDim.x + threadIdx.x) / 32;
+    if (a >= n) return;  // a whole warp
+    const uint32_t j = live[a];
+    nerf::MarchCursor c = states[j].cursor;
+    const Ray ray = states[j].ray;
+    nerf::cuda::warp_march_into_slots(a, j, m.march, m.grid, ray, c, k, samples);
+    if ((threadIdx.x & 31) == 0) states[j].cursor = c;
+}
+
+// add_nerf_sample over the round's samples 32 at a time: a sample is added while the transmittance before it is
+// above the threshold (acc.done() false), that transmittance being the state's minus a prefix sum of the optical
+// depths before it. The same sums as the sequential loop, added in another order.
+__device__ __forceinline__ void warp_composite(media::Accumulator& acc, const float* sigma, const Rgb* rgb,
+                                               const float* dt, uint32_t base, int used, float density_scale,
+                                               float emission_scale) {
+    constexpr unsigned all = 0xffffffffu;
+    const int lane = int(threadIdx.x & 31);
+    for (int q0 = 0; q0 < used && !acc.done(); q0 += 32) {
+        const int q = q0 + lane;
+        float tau = 0.0f;
+        Rgb c(0.0f);
+        if (q < used) {
+            tau = sigma[base + q] * density_scale * dt[base + q];  // Accumulator::add's (sigma scale) len
+            if (!(tau > 0.0f)) tau = 0.0f;                        // add() leaves such a sample out
+            if (acc.with_emission) {
+                const Rgb s = rgb[base + q];
+                c = Rgb(srgb_to_linear(s.x), srgb_to_linear(s.y), srgb_to_linear(s.z)) * emission_scale;
+            }
+        }
+        float through = tau;  // inclusive prefix sum of tau over the lanes
+#pragma unroll
+        for (int off = 1; off < 32; off <<= 1) {
+            const float o = __shfl_up_sync(all, through, off);
+            if (lane >= off) through += o;
+        }
+        const float log_before = acc.log_t - (through - tau);
+        const bool added = q < used && !(log_before < media::k_log_min_transmittance);
+        Rgb l = added && tau > 0.0f ? c * (expf(log_before) * -expm1f(-tau)) : Rgb(0.0f);
+#pragma unroll
+        for (int off = 16; off > 0; off >>= 1) {
+            l.x += __shfl_xor_sync(all, l.x, off);
+            l.y += __shfl_xor_sync(all, l.y, off);
+            l.z += __shfl_xor_sync(all, l.z, off);
+        }
+        const unsigned took = __ballot_sync(all, added);
+        if (took == 0) break;
+        acc.radiance += l;
+        acc.log_t -= __shfl_sync(all, through, 31 - __clz(took));  // through the last sample added
+    }
+}
+
+__global__ void __launch_bounds__(k_block) warp_composite_kernel(NerfSegmentModel m, WavefrontPath* paths,
+                                                                  const uint32_t* list, SegmentState* states,
+                                                                  const uint32_t* live, uint32_t n,
+                                                                  nerf::cuda::RenderSlots samples, const float* sigma,
+                                                                  const Rgb* rgb, uint32_t* next, uint32_t* next_count) {
+    const uint32_t a = (blockIdx.x * blockDim.x + threadIdx.x) / 32;
+    if (a >= n) return;  // a whole warp
+    const bool leader = (threadIdx.x & 31) == 0;
+    const uint32_t j = live[a];
+    const int kind = segment_kind(list[j]);
+    SegmentState& s = states[j];
+    media::Accumulator acc;
+    acc.radiance = s.radiance;
+    acc.log_t = s.log_t;
+    acc.with_emission = kind == 0;
+    warp_composite(acc, sigma, rgb, samples.dt, samples.first[a], samples.used[a], m.density_scale,
+                   m.emission_scale);
+    if (!leader) return;
+    if (acc.done() || s.cursor.done(m.march)) {
+        write_result(paths[segment_path(list[j])], kind, acc.radiance, acc.done() ? 0.0f : expf(acc.log_t));
+    } else {
+        s.radiance = acc.radiance;
+        s.log_t = acc.log_t;
+        next[atomicAdd(next_count, 1u)] = j;
+    }
+}
+
 }  // namespace
 
 void segment_gather(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next, uint32_t* next_count,
@@ -133,16 +217,27 @@ void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32
 }
 
 void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
-                   const nerf::cuda::RenderSlots& samples, cudaStream_t s) {
+                   bool by_warp, const nerf::cuda::RenderSlots& samples, cudaStream_t s) {
     if (n == 0) return;
+    if (by_warp) {
+        warp_march_kernel<<<warp_blocks_for(n), k_block, 0, s>>>(m, states, live, n, k, samples);
+        NPT_CUDA_CHECK_LAUNCH("segment warp_march_kernel");
+        return;
+    }
     march_kernel<<<blocks_for(n), k_block, 0, s>>>(m, states, live, n, k, samples);
     NPT_CUDA_CHECK_LAUNCH("segment march_kernel");
 }
 
 void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,
-                       const uint32_t* live, uint32_t n, const nerf::cuda::RenderSlots& samples, const float* sigma,
-                       const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s) {
+                       const uint32_t* live, uint32_t n, bool by_warp, const nerf::cuda::RenderSlots& samples,
+                       const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s) {
     if (n == 0) return;
+    if (by_warp) {
+        warp_composite_kernel<<<warp_blocks_for(n), k_block, 0, s>>>(m, paths, list, states, live, n, samples, sigma,
+                                                                      rgb, next, next_count);
+        NPT_CUDA_CHECK_LAUNCH("segment warp_composite_kernel");
+        return;
+    }
     composite_kernel<<<blocks_for(n), k_block, 0, s>>>(m, paths, list, states, live, n, samples, sigma, rgb,
                                                        next, next_count);
     NPT_CUDA_CHECK_LAUNCH("segment composite_kernel");

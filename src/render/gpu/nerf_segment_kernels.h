@@ -44,12 +44,14 @@ void segment_gather(WavefrontPath* paths, const uint32_t* active, uint32_t n, ui
 // (no emission, T = 1), the others go to `live`.
 void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, uint32_t n,
                    SegmentState* states, Vec3* dirs, uint32_t* live, uint32_t* live_count, cudaStream_t s);
-// Up to k samples for each of the n live segments.
+// Up to k samples for each of the n live segments. by_warp: a warp per segment (uniform steps only, see
+// warp_march_into_slots), for the rounds of a few long segments; the samples are the same.
 void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
-                   const nerf::cuda::RenderSlots& samples, cudaStream_t s);
-// Composites the round's samples; finished segments are written into their paths, the others appended to next.
+                   bool by_warp, const nerf::cuda::RenderSlots& samples, cudaStream_t s);
+// Composites the round's samples (by_warp: a warp per segment, as the march); finished segments are written into
+// their paths, the others appended to next.
 void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,
-                       const uint32_t* live, uint32_t n, const nerf::cuda::RenderSlots& samples, const float* sigma,
-                       const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s);
+                       const uint32_t* live, uint32_t n, bool by_warp, const nerf::cuda::RenderSlots& samples,
+                       const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s);
 
 }  // namespace npt::gpu

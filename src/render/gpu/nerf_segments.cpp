@@ -1,6 +1,7 @@
 #include "render/gpu/nerf_segments.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <string>
 
 #include "nerf/cuda/adam_kernels.h"
@@ -17,17 +18,22 @@ namespace {
 // evaluated past the point where a segment turns opaque), a short one (later bounces) with up to 128, so it
 // ends in a round or two instead of a handful of nearly empty ones, each with a synchronisation.
 constexpr int k_min_first_round = 8;
-constexpr int k_max_round = 128;  // RenderSlots::used is 8 bits
 constexpr uint32_t k_round_samples = 1u << 22;
 // The sample buffers: 8 per path of a wave, between 4 and 16 million (about 120 bytes each).
 constexpr size_t k_min_samples = size_t(1) << 22, k_max_samples = size_t(1) << 24;
 
-int first_round(uint32_t segments) {
+int first_round(uint32_t segments, int max_round) {
     int k = k_min_first_round;
-    while (k < k_max_round && uint64_t(k) * segments < k_round_samples) k *= 2;
-    return k;
+    while (k < max_round && uint64_t(k) * segments < k_round_samples) k *= 2;
+    return std::min(k, max_round);
 }
 }  // namespace
+
+NerfPassTuning NerfPassTuning::defaults() {
+    NerfPassTuning t;
+    if (const char* e = std::getenv("NERFPT_SEGMENT_WARP_BELOW")) t.warp_below = uint32_t(std::strtoul(e, nullptr, 10));
+    return t;
+}
 
 struct NerfSegmentPass::Buffers {
     size_t paths = 0, segments = 0, samples = 0;
@@ -139,8 +145,9 @@ uint32_t NerfSegmentPass::run(WavefrontPath* paths, const uint32_t* active, uint
 }
 
 std::string NerfSegmentPass::stats() {
-    std::string s = std::to_string(m_segments) + " segments in " + std::to_string(m_rounds) + " rounds";
-    m_segments = m_rounds = 0;
+    std::string s = std::to_string(m_segments) + " segments in " + std::to_string(m_rounds) + " rounds, " +
+                    std::to_string(m_warp_rounds) + " of them a warp per segment";
+    m_segments = m_rounds = m_warp_rounds = 0;
     return s;
 }
 
@@ -157,12 +164,19 @@ void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
     const nerf::cuda::RenderSlots samples{b.pos.data(), b.dt.data(), b.owner.data(), b.first.data(), b.used.data(), sample_count,
                            b.scratch.data()};
     const uint32_t capacity = uint32_t(b.samples);
+    const NerfPassTuning& t = m_tuning;
+    // The warp form needs the global lattice of uniform steps.
+    const uint32_t warp_below = m.march.cone_angle == 0.0f ? t.warp_below : 0u;
+    const int max_round = std::clamp(t.max_round, 1, 255), max_warp_round = std::clamp(t.max_warp_round, 1, 255);
     int cur = 0;
-    for (int k = first_round(live); live > 0; k = std::min(2 * k, k_max_round)) {
+    for (int k = first_round(live, max_round); live > 0; k *= 2) {
         ++m_rounds;
+        const bool by_warp = live <= warp_below;
+        m_warp_rounds += by_warp ? 1 : 0;
+        k = std::min(k, by_warp ? max_warp_round : max_round);
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / live)));
         cuda_check(cudaMemsetAsync(sample_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
-        segment_march(m, b.states.data(), b.live[cur].data(), live, kk, samples, m_stream);
+        segment_march(m, b.states.data(), b.live[cur].data(), live, kk, by_warp, samples, m_stream);
         // With colour for every sample: the shadow segments' colour is not needed, but evaluating both kinds in
         // the same rounds halves the rounds (and their synchronisations).
         nerf::cuda::render_field_fp16(m.layout, m.params, m.mlp_half, samples, b.dirs.data(), capacity,
@@ -170,7 +184,7 @@ void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
         const int nxt = 1 - cur;
         uint32_t* next_count = b.counts.data() + 1 + nxt;
         cuda_check(cudaMemsetAsync(next_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
-        segment_composite(m, paths, list, b.states.data(), b.live[cur].data(), live, samples, b.sigma.data(),
+        segment_composite(m, paths, list, b.states.data(), b.live[cur].data(), live, by_warp, samples, b.sigma.data(),
                           b.rgb.data(), b.live[nxt].data(), next_count, m_stream);
         live = read(next_count);
         cur = nxt;

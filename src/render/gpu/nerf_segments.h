@@ -31,6 +31,19 @@ struct NerfSegmentModel {
     float density_scale = 1.0f, emission_scale = 1.0f;
 };
 
+// How the pass splits its rounds. The defaults were measured on the H200 (docs/benchmarks.md, issue 13); tests
+// force either form.
+struct NerfPassTuning {
+    // A round of at most this many live segments marches and composites each with a whole warp (uniform steps
+    // only): the long segments of a round's tail are then not one thread's long dependent chain. 0: never.
+    // NERFPT_SEGMENT_WARP_BELOW overrides the default (a benchmark knob).
+    uint32_t warp_below = 1u << 15;
+    // Samples per segment and round at most; rounds double up to it (RenderSlots::used holds 255).
+    int max_round = 128;
+    int max_warp_round = 255;
+    static NerfPassTuning defaults();
+};
+
 class NerfSegmentPass {
   public:
     // host: the scene's volumes with host pointers (SceneData); device: the same on the device (DeviceScene).
@@ -53,6 +66,8 @@ class NerfSegmentPass {
     // Since the last call: segments evaluated and rounds; then the counts restart.
     std::string stats();
 
+    void set_tuning(const NerfPassTuning& t) { m_tuning = t; }
+
   private:
     struct Buffers;
     void evaluate(WavefrontPath* paths, size_t model, uint32_t n);
@@ -64,7 +79,8 @@ class NerfSegmentPass {
     std::vector<DeviceBuffer<uint32_t>> m_bits;
     DeviceBuffer<uint32_t> m_slot_of_volume;
     std::unique_ptr<Buffers> m_buf;
-    uint64_t m_segments = 0, m_rounds = 0;
+    NerfPassTuning m_tuning = NerfPassTuning::defaults();
+    uint64_t m_segments = 0, m_rounds = 0, m_warp_rounds = 0;
 };
 
 }  // namespace npt::gpu

@@ -40,6 +40,27 @@ struct StreamOwner {
 };
 }  // namespace
 
+// render_frame's image, page-locked so that the download runs at the bus's speed (a 1080p frame is 25 MB: from
+// pageable memory, staged by the driver, it took longer than the NeRF pass's tail). Where the system will not
+// lock the pages the image stays pageable: slower, not wrong.
+struct OptixRenderer::PinnedImage {
+    Image image;
+    bool pinned = false;
+    PinnedImage(int w, int h) : image(w, h, 3) {
+        pinned = cudaHostRegister(image.pixels.data(), image.pixels.size() * sizeof(float), cudaHostRegisterDefault) ==
+                 cudaSuccess;
+        if (!pinned) {
+            cudaGetLastError();  // clear it: the frame works without
+            spdlog::debug("render: the frame buffer could not be page-locked; downloads are slower");
+        }
+    }
+    ~PinnedImage() {
+        if (pinned) cudaHostUnregister(image.pixels.data());
+    }
+    PinnedImage(const PinnedImage&) = delete;
+    PinnedImage& operator=(const PinnedImage&) = delete;
+};
+
 // Grids through hardware-filtered textures (2x faster on cornell_volume, the same image within noise;
 // docs/benchmarks.md) unless NERFPT_OPTIX_GRID_TEXTURES=0, a benchmark knob: the exact eight-voxel lookup.
 static bool use_grid_textures() {
@@ -85,6 +106,13 @@ struct OptixRenderer::State {
     DeviceBuffer<float> rgb;
     DeviceBuffer<unsigned long long> dropped{1};
     DeviceBuffer<LaunchParams> params{1};
+    std::unique_ptr<PinnedImage> frame;  // render_frame's, made by its first call
+
+    // Renders into the device image (rgb); with albedo and normal, also writes the denoiser's guides there.
+    void trace(const render::RenderOptions& options, const render::ProgressFn& progress, float4* albedo,
+               float4* normal);
+    // Downloads the device image into host_rgb (3 floats per pixel) and warns about dropped samples.
+    void download(float* host_rgb);
 };
 
 OptixRenderer::OptixRenderer(const scene::Scene& scene, int width, int height) {
@@ -97,73 +125,99 @@ OptixRenderer::~OptixRenderer() = default;
 
 Image OptixRenderer::render(const render::RenderOptions& options, const render::ProgressFn& progress,
                             Image* denoised) {
-    const int width = m->width, height = m->height;
+    const size_t pixels = size_t(m->width) * size_t(m->height);
+    cudaStream_t stream = m->stream.s;
+    std::unique_ptr<OptixDenoiserPass> denoiser;
+    DeviceBuffer<float4> albedo, normal;  // the denoiser's guides
+    if (denoised) {
+        denoiser = std::make_unique<OptixDenoiserPass>(m->ctx.get(), stream, m->width, m->height);
+        albedo.allocate(pixels, "the denoiser's guides", "--res");
+        normal.allocate(pixels, "the denoiser's guides", "--res");
+    }
+    m->trace(options, progress, albedo.data(), normal.data());
+    Image image(m->width, m->height, 3);
+    m->download(image.pixels.data());
+    if (denoiser) *denoised = denoiser->run(image, albedo.data(), normal.data());
+    return image;
+}
+
+const Image& OptixRenderer::render_frame(const render::RenderOptions& options) {
+    if (!m->frame) m->frame = std::make_unique<PinnedImage>(m->width, m->height);
+    m->trace(options, {}, nullptr, nullptr);
+    m->download(m->frame->image.pixels.data());
+    return m->frame->image;
+}
+
+void OptixRenderer::State::download(float* host_rgb) {
+    cudaStream_t s = stream.s;
+    cuda_check(cudaMemcpyAsync(host_rgb, rgb.data(), rgb.bytes(), cudaMemcpyDeviceToHost, s),
+               "downloading the image");
+    unsigned long long bad = 0;
+    cuda_check(cudaMemcpyAsync(&bad, dropped.data(), sizeof bad, cudaMemcpyDeviceToHost, s),
+               "cudaMemcpyAsync");
+    cuda_check(cudaStreamSynchronize(s), "rendering with OptiX");
+    if (bad > 0) spdlog::warn("render: {} samples were NaN or infinite and were dropped", bad);
+}
+
+void OptixRenderer::State::trace(const render::RenderOptions& options, const render::ProgressFn& progress,
+                                 float4* albedo, float4* normal) {
     if (options.width != width || options.height != height)
         throw Error("OptixRenderer: built for " + std::to_string(width) + "x" + std::to_string(height) +
                     ", asked for " + std::to_string(options.width) + "x" + std::to_string(options.height));
     const uint32_t spp = uint32_t(options.spp);
-    cudaStream_t stream = m->stream.s;
-    std::unique_ptr<OptixDenoiserPass> denoiser;
-    if (denoised) denoiser = std::make_unique<OptixDenoiserPass>(m->ctx.get(), stream, width, height);
+    cudaStream_t s = stream.s;
+    const bool guides = albedo != nullptr;
 
     const size_t pixels = size_t(width) * size_t(height);
     // Sample slots: a launch of width x height x slots threads, slot z tracing samples z, z + slots, ... of its
     // pixel into its own plane of sums; the planes are added in a fixed order, so a seed gives one image.
     const uint32_t slots = slots_for(pixels, spp);
-    DeviceBuffer<float4>& accum = m->accum;
     if (accum.size() < pixels * slots) accum.allocate(pixels * slots, "the image", "--res");
-    cuda_check(cudaMemsetAsync(accum.data(), 0, pixels * slots * sizeof(float4), stream), "cudaMemsetAsync");
-    if (m->rgb.size() != 3 * pixels) m->rgb.allocate(3 * pixels, "the image", "--res");
-    const DeviceBuffer<unsigned long long>& dropped = m->dropped;
-    dropped.zero_async(stream);
-    const DeviceBuffer<LaunchParams>& params = m->params;
-    DeviceBuffer<float4> albedo, normal;  // the denoiser's guides
-    if (denoised) {
-        albedo.allocate(pixels, "the denoiser's guides", "--res");
-        normal.allocate(pixels, "the denoiser's guides", "--res");
-    }
+    cuda_check(cudaMemsetAsync(accum.data(), 0, pixels * slots * sizeof(float4), s), "cudaMemsetAsync");
+    if (rgb.size() != 3 * pixels) rgb.allocate(3 * pixels, "the image", "--res");
+    dropped.zero_async(s);
 
     LaunchParams p;
-    p.scene = m->dev.view();
-    p.handle = m->accel.handle();
+    p.scene = dev.view();
+    p.handle = accel.handle();
     p.accum = accum.data();
     p.dropped = dropped.data();
     p.width = width;
     p.height = height;
     p.slots = slots;
     p.seed = options.seed;
-    p.albedo = albedo.data();
-    p.normal = normal.data();
+    p.albedo = albedo;
+    p.normal = normal;
     p.path.max_depth = options.max_depth;
 
     const uint64_t total = uint64_t(pixels) * spp;
     uint32_t done = 0, batch = slots;  // the first launch: one sample per slot
-    if (m->wavefront) {
-        if (denoised) {
+    if (wavefront) {
+        if (guides) {
             // The guides only: the per-thread program with no samples writes them (sample_begin 0, slot 0).
             p.sample_begin = p.sample_count = 0;
-            cuda_check(cudaMemcpyAsync(params.data(), &p, sizeof p, cudaMemcpyHostToDevice, stream), "cudaMemcpyAsync");
-            optix_check(optixLaunch(m->programs.pipeline(), stream, CUdeviceptr(params.data()), sizeof(LaunchParams),
-                                    &m->programs.sbt(), unsigned(width), unsigned(height), 1),
+            cuda_check(cudaMemcpyAsync(params.data(), &p, sizeof p, cudaMemcpyHostToDevice, s), "cudaMemcpyAsync");
+            optix_check(optixLaunch(programs.pipeline(), s, CUdeviceptr(params.data()), sizeof(LaunchParams),
+                                    &programs.sbt(), unsigned(width), unsigned(height), 1),
                         "optixLaunch");
         }
         for (; done < spp; done += batch) {
             batch = std::min(slots, spp - done);
             p.sample_begin = done;
-            m->wavefront->run_wave(p, batch, m->programs, params.data());
+            wavefront->run_wave(p, batch, programs, params.data());
             if (progress) progress(uint64_t(pixels) * (done + batch), total);
         }
     }
     while (done < spp) {
         p.sample_begin = done;
         p.sample_count = std::min(batch, spp - done);
-        cuda_check(cudaMemcpyAsync(params.data(), &p, sizeof p, cudaMemcpyHostToDevice, stream), "cudaMemcpyAsync");
+        cuda_check(cudaMemcpyAsync(params.data(), &p, sizeof p, cudaMemcpyHostToDevice, s), "cudaMemcpyAsync");
         const auto t0 = std::chrono::steady_clock::now();
-        optix_check(optixLaunch(m->programs.pipeline(), stream, CUdeviceptr(params.data()), sizeof(LaunchParams),
-                                &m->programs.sbt(), unsigned(width), unsigned(height),
+        optix_check(optixLaunch(programs.pipeline(), s, CUdeviceptr(params.data()), sizeof(LaunchParams),
+                                &programs.sbt(), unsigned(width), unsigned(height),
                                 std::min(slots, p.sample_count)),
                     "optixLaunch");
-        cuda_check(cudaStreamSynchronize(stream), "rendering with OptiX");
+        cuda_check(cudaStreamSynchronize(s), "rendering with OptiX");
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         done += p.sample_count;
         if (progress) progress(uint64_t(pixels) * done, total);
@@ -173,16 +227,7 @@ Image OptixRenderer::render(const render::RenderOptions& options, const render::
         batch = std::max(slots, uint32_t(next) / slots * slots);
     }
 
-    resolve_image(accum.data(), slots, pixels, 1.0f / float(spp), m->rgb.data(), stream);
-    Image image(width, height, 3);
-    cuda_check(cudaMemcpyAsync(image.pixels.data(), m->rgb.data(), m->rgb.bytes(), cudaMemcpyDeviceToHost, stream),
-               "downloading the image");
-    unsigned long long bad = 0;
-    cuda_check(cudaMemcpyAsync(&bad, dropped.data(), sizeof bad, cudaMemcpyDeviceToHost, stream), "cudaMemcpyAsync");
-    cuda_check(cudaStreamSynchronize(stream), "rendering with OptiX");
-    if (bad > 0) spdlog::warn("render: {} samples were NaN or infinite and were dropped", bad);
-    if (denoiser) *denoised = denoiser->run(image, albedo.data(), normal.data());
-    return image;
+    resolve_image(accum.data(), slots, pixels, 1.0f / float(spp), rgb.data(), s);
 }
 
 Image render_optix(const scene::Scene& scene, const render::RenderOptions& options,

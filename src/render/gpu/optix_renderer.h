@@ -23,9 +23,13 @@ class OptixRenderer {
     // runs the denoiser (albedo and normal guides) and puts its image there.
     Image render(const render::RenderOptions& options, const render::ProgressFn& progress,
                  Image* denoised = nullptr);
+    // The same render into the renderer's own page-locked frame (frames of a viewer or an animation): no image
+    // allocated per frame and a download at the bus's speed. The reference holds until the next call.
+    const Image& render_frame(const render::RenderOptions& options);
 
   private:
     struct State;
+    struct PinnedImage;
     std::unique_ptr<State> m;
 };
 
