@@ -74,7 +74,8 @@ run)
     nvidia-smi -L
     nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.mem,memory.total --format=csv
     status=0
-    $unpacked/bin/nerfpt_gpu_tests --gtest_brief=1 "${@:2}" || status=$?
+    # Line-buffered: a test that hangs until the caller's timeout still leaves what ran before it in the log.
+    stdbuf -oL $unpacked/bin/nerfpt_gpu_tests --gtest_brief=1 "${@:2}" || status=$?
     echo "gpu_check: nerfpt_gpu_tests exit code $status"
     exit $status
     ;;

@@ -188,6 +188,17 @@ NPT_HD inline bool march_clip(const MarchParams& mp, const Ray& ray, Vec3 box_mi
     return c->t < c->t_far;
 }
 
+// Where march_continue goes on from p = o + t d in an empty cell of cascade c: the exit of that cell, or of its
+// whole coarse cell where that is empty too (no sample can lie in it), plus an epsilon (a millionth of a cell, or
+// of t where t is larger) that moves the target off the boundary itself, so that rounding of o + t d cannot leave
+// the next position in this cell.
+NPT_HD NPT_INLINE float march_skip_target(const OccupancyGridView& grid, Vec3 p, float t, Vec3 d, Vec3 inv_d, int c) {
+    const float cell = grid.cascade_size(c) / float(grid.resolution);
+    const float eps = fmaxf(1e-6f * cell, 1e-6f * t);
+    const float skip_cell = grid.coarse_occupied(p, c) ? cell : cell * float(OccupancyGridView::k_coarse);
+    return t + march_distance_to_cell_exit(p, d, inv_d, skip_cell) + eps;
+}
+
 // Continues the march: calls visit(MarchSample) for each sample in order until visit returns false (the
 // cursor then stands after that sample) or the march is done. Samples lie in occupied cells only; their dt is
 // the step taken at them. A view without occupancy (has_occupancy() false) counts every cell as occupied.
@@ -219,14 +230,7 @@ NPT_HD inline void march_continue(const MarchParams& mp, const OccupancyGridView
                 c.stopped = true;
                 return;
             }
-            // The epsilon (a millionth of a cell, or of t where t is larger) moves the target off the
-            // boundary itself, so that rounding of o + t d cannot leave the next position in this cell.
-            const float cell = grid.cascade_size(cas) / float(grid.resolution);
-            const float eps = fmaxf(1e-6f * cell, 1e-6f * t);
-            // Inside an empty coarse cell the whole coarse cell is crossed at once: no sample can lie in it.
-            const float skip_cell =
-                grid.coarse_occupied(p, cas) ? cell : cell * float(OccupancyGridView::k_coarse);
-            const float target = t + march_distance_to_cell_exit(p, ray.d, inv_d, skip_cell) + eps;
+            const float target = march_skip_target(grid, p, t, ray.d, inv_d, cas);
             float next;
             if (lattice) {
                 const float kn = march_lattice_next(c.t0, inv_dt, c.k, target);

@@ -40,11 +40,12 @@ namespace npt::nerf::cuda {
 // The same round for one ray per warp, for rays whose one-thread march would be a long dependent chain (the few
 // long segments left in a round's tail). Only for uniform steps (cone_angle 0): the lattice t0 + k dt is then
 // global, so lane l tests lattice point c.k + l and the warp finds 32 points' occupancy at once. The samples are
-// march_continue's — the lattice points in occupied cells, in order, at most k this round and mp.max_samples in
-// all — and where a chunk of 32 ends in an empty cell the march jumps on from its last point by the same rule as
-// march_continue's skip. (march_continue tests fewer points: a point within its skip's epsilon, a millionth of a
-// cell, past the exit of an empty cell is skipped there and tested here.) Every lane calls it with the same
-// arguments and cursor and leaves with the same cursor; lane 0 writes slots.first/used[a].
+// march_continue's: the lattice points in occupied cells, in order, at most k this round and mp.max_samples in
+// all, less the points march_continue's skip steps over (an occupied point within the skip's epsilon past the
+// exit of the empty cell before it: a point whose predecessor is empty is taken only where the skip from that
+// predecessor reaches it). Where a chunk of 32 ends in an empty cell the march jumps on from its last point by
+// the same skip. Every lane calls it with the same arguments and cursor and leaves with the same cursor; lane 0
+// writes slots.first/used[a].
 __device__ __forceinline__ void warp_march_into_slots(uint32_t a, uint32_t owner, const MarchParams& mp,
                                                       const OccupancyGridView& grid, const Ray& ray, MarchCursor& c,
                                                       int k, const RenderSlots& slots) {
@@ -66,7 +67,18 @@ __device__ __forceinline__ void warp_march_into_slots(uint32_t a, uint32_t owner
         const bool valid = t < c.t_far && advancing && kl >= c.k;
         const Vec3 p = ray.at(t);
         const int cas = valid ? march_cascade(grid, p, dt) : 0;
-        const bool occupied = valid && (!grid.has_occupancy() || grid.is_occupied(p, cas));
+        const bool in_cell = valid && (!grid.has_occupancy() || grid.is_occupied(p, cas));
+        // Lane 0's predecessor was occupied, or skipped from already, or there is none (the march's start). (The
+        // shuffle outside the condition: every lane of `all` must take part in it.)
+        const bool before_in_cell = __shfl_up_sync(all, in_cell, 1);
+        const bool after_empty = lane > 0 && !before_in_cell;
+        bool occupied = in_cell;
+        if (in_cell && after_empty) {
+            const float tp = c.t0 + float(kl - 1u) * dt;
+            const Vec3 pp = ray.at(tp);
+            const float target = march_skip_target(grid, pp, tp, ray.d, inv_d, march_cascade(grid, pp, dt));
+            occupied = march_lattice_next(c.t0, inv_dt, kl - 1u, target) <= float(kl);
+        }
         const unsigned invalid = __ballot_sync(all, !valid);
         const int first_invalid = invalid ? __ffs(invalid) - 1 : 32;
         const unsigned in_range = first_invalid == 32 ? all : (1u << first_invalid) - 1u;
@@ -96,13 +108,8 @@ __device__ __forceinline__ void warp_march_into_slots(uint32_t a, uint32_t owner
         // All 32 points tested: go on after them, or, where the last one is empty, from the far side of its
         // empty cell (march_continue's skip).
         float kn = float(c.k) + 32.0f;
-        if (lane == 31 && !occupied) {
-            const float cell = grid.cascade_size(cas) / float(grid.resolution);
-            const float eps = fmaxf(1e-6f * cell, 1e-6f * t);
-            const float skip_cell = grid.coarse_occupied(p, cas) ? cell : cell * float(OccupancyGridView::k_coarse);
-            const float target = t + march_distance_to_cell_exit(p, ray.d, inv_d, skip_cell) + eps;
-            kn = fmaxf(kn, march_lattice_next(c.t0, inv_dt, kl, target));
-        }
+        if (lane == 31 && !in_cell)
+            kn = fmaxf(kn, march_lattice_next(c.t0, inv_dt, kl, march_skip_target(grid, p, t, ray.d, inv_d, cas)));
         kn = __shfl_sync(all, kn, 31);
         if (!(kn < 4.0e9f)) {  // beyond any lattice a ray can have
             c.stopped = true;
