@@ -36,8 +36,9 @@ struct NerfSegmentModel {
 struct NerfPassTuning {
     // A round of at most this many live segments marches and composites each with a whole warp (uniform steps
     // only): the long segments of a round's tail are then not one thread's long dependent chain. 0: never.
-    // NERFPT_SEGMENT_WARP_BELOW overrides the default (a benchmark knob).
-    uint32_t warp_below = 1u << 15;
+    // NERFPT_SEGMENT_WARP_BELOW overrides the default (a benchmark knob). Measured on the NeRF demo at 1080p
+    // (docs/gpu_runs/optix9_warp_below.log): 0 49 frames/s, 2^13 56, 2^15 57, 2^17 59.5, 2^19 58.
+    uint32_t warp_below = 1u << 17;
     // Samples per segment and round at most; rounds double up to it (RenderSlots::used holds 255).
     int max_round = 128;
     int max_warp_round = 255;
