@@ -23,6 +23,28 @@ __device__ __forceinline__ void write_result(WavefrontPath& p, int kind, Rgb rad
     }
 }
 
+// A segment's compositing where its last round left it.
+__device__ __forceinline__ media::Accumulator resume(const SegmentState& s, uint32_t item) {
+    media::Accumulator acc;
+    acc.radiance = s.radiance;
+    acc.log_t = s.log_t;
+    acc.with_emission = segment_kind(item) == 0;
+    return acc;
+}
+
+// After a round: a segment that turned opaque or reached its end is written into its path; true for one that goes
+// on (its compositing kept for the next round).
+__device__ __forceinline__ bool finish_or_keep(const NerfSegmentModel& m, WavefrontPath* paths, uint32_t item,
+                                               SegmentState& s, const media::Accumulator& acc) {
+    if (acc.done() || s.cursor.done(m.march)) {
+        write_result(paths[segment_path(item)], segment_kind(item), acc.radiance, acc.done() ? 0.0f : expf(acc.log_t));
+        return false;
+    }
+    s.radiance = acc.radiance;
+    s.log_t = acc.log_t;
+    return true;
+}
+
 __global__ void __launch_bounds__(k_block) gather_kernel(WavefrontPath* paths, const uint32_t* active, uint32_t n,
                                                           uint32_t* next, uint32_t* next_count, SegmentLists lists) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
@@ -94,25 +116,14 @@ __global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, 
     uint32_t j = 0;
     if (a < n) {
         j = live[a];
-        const int kind = segment_kind(list[j]);
-        SegmentState& s = states[j];
         // media::march_nerf's compositing, sample by sample (volume_integrator.h).
-        media::Accumulator acc;
-        acc.radiance = s.radiance;
-        acc.log_t = s.log_t;
-        acc.with_emission = kind == 0;
+        media::Accumulator acc = resume(states[j], list[j]);
         const uint32_t base = samples.first[a];
         const int used = samples.used[a];
         for (int q = 0; q < used && !acc.done(); ++q)
             media::add_nerf_sample(acc, sigma[base + q], rgb[base + q], samples.dt[base + q], m.density_scale,
                                    m.emission_scale);
-        if (acc.done() || s.cursor.done(m.march)) {
-            write_result(paths[segment_path(list[j])], kind, acc.radiance, acc.done() ? 0.0f : expf(acc.log_t));
-        } else {
-            s.radiance = acc.radiance;
-            s.log_t = acc.log_t;
-            go_on = true;
-        }
+        go_on = finish_or_keep(m, paths, list[j], states[j], acc);
     }
     warp_append(go_on, j, next, next_count);
 }
@@ -182,22 +193,10 @@ __global__ void __launch_bounds__(k_block) warp_composite_kernel(NerfSegmentMode
     if (a >= n) return;  // a whole warp
     const bool leader = (threadIdx.x & 31) == 0;
     const uint32_t j = live[a];
-    const int kind = segment_kind(list[j]);
-    SegmentState& s = states[j];
-    media::Accumulator acc;
-    acc.radiance = s.radiance;
-    acc.log_t = s.log_t;
-    acc.with_emission = kind == 0;
+    media::Accumulator acc = resume(states[j], list[j]);
     warp_composite(acc, sigma, rgb, samples.dt, samples.first[a], samples.used[a], m.density_scale,
                    m.emission_scale);
-    if (!leader) return;
-    if (acc.done() || s.cursor.done(m.march)) {
-        write_result(paths[segment_path(list[j])], kind, acc.radiance, acc.done() ? 0.0f : expf(acc.log_t));
-    } else {
-        s.radiance = acc.radiance;
-        s.log_t = acc.log_t;
-        next[atomicAdd(next_count, 1u)] = j;
-    }
+    if (leader && finish_or_keep(m, paths, list[j], states[j], acc)) next[atomicAdd(next_count, 1u)] = j;
 }
 
 }  // namespace
