@@ -127,13 +127,14 @@ class GridCheck {
         for (int level = 0; level < 3; ++level) {
             const uint64_t count = t.mNodeCount[level], off = t.mNodeOffset[level];
             m_count[level] = count;
-            m_seen[level].assign(count, 0);
             if (count == 0) continue;
             if (off % k_align || !fits(left, off, count, k_node_bytes[level]))
                 fail("tree: " + str(count) + " " + k_level[level] + " nodes of " + str(k_node_bytes[level]) +
                      " bytes from offset " + str(off) + " do not fit in the grid's " + str(m_size) +
                      " bytes");
             m_first[level] = k_tree_at + off;
+            // Only now: sized before the check, a count of 2^32 - 1 was a 4 GB table (a fuzz finding).
+            m_seen[level].assign(count, 0);
         }
     }
 

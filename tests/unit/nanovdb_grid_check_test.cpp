@@ -101,6 +101,8 @@ TEST(NanoVdbGridCheck, EveryOffsetAndCountOutsideTheGridIsAnError) {
 
     // The fuzz finding: NanoVDB's checksum walked 98 upper nodes from the first one.
     expect(good.with<uint32_t>(counts + 2 * 4, 98), {"grid 'density'", "tree: 98 upper internal nodes"});
+    // 2^32 - 1 leaves: an error at once, not a 4 GB table of the nodes reached (a fuzz finding: a timeout).
+    expect(good.with<uint32_t>(counts, 0xffffffffu), {"tree: 4294967295 leaf nodes"});
     expect(good.with<uint64_t>(offsets,
                                good.get<uint64_t>(good.density + offsetof(nanovdb::GridData, mGridSize))),
            {"leaf nodes", "do not fit in the grid's"});
