@@ -9,10 +9,12 @@
 #include <cctype>
 #include <exception>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "core/error.h"
 #include "core/memory.h"
+#include "media/nanovdb_grid_check.h"
 #include "media/nanovdb_layout.h"
 
 namespace npt::media {
@@ -57,7 +59,8 @@ std::string grid_names(const std::vector<nanovdb::io::GridMetaData>& metas) {
 
 // Reads grid `name` of value type ValueT, after checking from the file's metadata that it is there, of the
 // right type, uncompressed and no larger than the file (so that a corrupt header cannot make us allocate
-// gigabytes), then validates the grid's structure and checksum before anyone walks its tree.
+// gigabytes), then checks every offset and count in the grid against its bytes (nanovdb_grid_check.h:
+// NanoVDB's checksum and accessors trust them) before NanoVDB validates the structure and the checksum.
 template <typename ValueT>
 nanovdb::GridHandle<> read_typed(const std::string& where, const nanovdb::io::GridMetaData& meta,
                                  nanovdb::GridType type, uintmax_t file_size) {
@@ -72,6 +75,8 @@ nanovdb::GridHandle<> read_typed(const std::string& where, const nanovdb::io::Gr
         throw Error(where + ": " + grid + " claims " + std::to_string(meta.gridSize) +
                     " bytes in a file of " + std::to_string(file_size) + " bytes (corrupt file)");
     auto handle = nanovdb::io::readGrid<nanovdb::HostBuffer>(where, meta.gridName);
+    check_nanovdb_grid(where, meta.gridName, handle.data(), handle.size(),
+                       std::is_same_v<ValueT, float> ? NanoValueType::f32 : NanoValueType::vec3f);
     const auto* g = handle.template grid<ValueT>();
     if (!g || !nanovdb::isValid(*g, true, false))
         throw Error(where + ": " + grid + " is corrupt (its structure or checksum does not match)");
@@ -145,8 +150,8 @@ VolumeGrid read_nanovdb_grid(const std::filesystem::path& path, size_t max_voxel
         g.local_to_index.t =
             Vec3(float(dmap.b[0] - lo[0]), float(dmap.b[1] - lo[1]), float(dmap.b[2] - lo[2]));
 
-        with_memory_context(where + ": grid 'density': a dense " + std::to_string(nx) + "x" + std::to_string(ny) +
-                                "x" + std::to_string(nz) + " grid",
+        with_memory_context(where + ": grid 'density': a dense " + std::to_string(nx) + "x" +
+                                std::to_string(ny) + "x" + std::to_string(nz) + " grid",
                             double(n) * (4.0 + 12.0), "use a coarser grid", [&] {
                                 g.density.resize(n);
                                 g.color.reserve(n);  // density and colour together, or neither
