@@ -5,9 +5,10 @@
 #
 # --sanitize (first argument): instead, the ASan + UBSan build in build-san/ (clang; scripts/configure_sanitize.sh):
 # the unit and CLI tests under the sanitizers, then every fuzz harness for $NERFPT_FUZZ_SECONDS (default 10)
-# seconds each (scripts/fuzz.sh). Any sanitizer report fails the run. --sanitize --quick (what CI runs) skips
-# the CLI build and the tests that train or render for minutes (numerics, not input handling; under ASan they
-# take 5 of its 11 minutes on one core).
+# seconds each (scripts/fuzz.sh, as many at once as build jobs). Any sanitizer report fails the run.
+# --sanitize --quick (what CI runs) skips the CLI build and the tests that train, render or check numerics for
+# long (numerics, not input handling; under ASan they took 5 of its 11 minutes on one core): the slow list below,
+# each with what still runs its code under the sanitizers.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 jobs=${NERFPT_JOBS:-$(nproc)}
@@ -28,13 +29,20 @@ if [[ "${1:-}" == "--sanitize" ]]; then
     export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/cmake/lsan_suppressions.txt}
     if [[ $quick -eq 1 ]]; then
         cmake --build build-san -j "$jobs" --target nerfpt_unit_tests fuzzers
+        # NerfTraining, BakeRoundTrip, TrainResume, EvalViewCli, FitTimeMapping: minutes of training and rendering.
+        # MlpBatch.GradientsMatchFiniteDifferencesColourNetwork (20 s under ASan): the library's forward and
+        # backward run once, the time goes to the test's double-precision finite differences; the same shape's
+        # backward runs in MlpBatch.BackwardAdds..., the density network's finite differences still run.
+        # WavefrontSegment.AQueued... (7 s): 300 rays marched twice to compare numbers; OtherSegments... runs the
+        # same hand-over code.
         slow='NerfTraining\.|BakeRoundTrip\.|TrainResume\.|EvalViewCli\.|FitTimeMapping'
+        slow+='|MlpBatch\.GradientsMatchFiniteDifferencesColourNetwork|WavefrontSegment\.AQueuedNerfSegment'
         (cd build-san && ctest -L unit -E "$slow" --output-on-failure -j "$jobs" "$@")
     else
         cmake --build build-san -j "$jobs" --target nerfpt_unit_tests nerfpt_cli fuzzers
         (cd build-san && ctest -L "unit|cli" --output-on-failure -j "$jobs" "$@")
     fi
-    scripts/fuzz.sh "${NERFPT_FUZZ_SECONDS:-10}"
+    NERFPT_FUZZ_JOBS=${NERFPT_FUZZ_JOBS:-$jobs} scripts/fuzz.sh "${NERFPT_FUZZ_SECONDS:-10}"
     echo "test.sh --sanitize: $(($(date +%s) - start)) s"
     exit 0
 fi
