@@ -64,8 +64,10 @@ template <int F>
 __global__ void __launch_bounds__(k_block) hash_encode_kernel(HashGridArgs a, HashLevels levels,
                                                               const float* grid, __half* out) {
     const uint32_t n = count_of(a);
-    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < n; i += gridDim.x * blockDim.x)
-        encode_one<F>(a, levels, grid, out, i);
+    uint32_t m = 0;  // the top run, within the buffers and clear of the bottom one
+    if (a.top_count && a.top > n) m = min(*a.top_count, a.top - n);
+    for (uint32_t v = blockIdx.x * blockDim.x + threadIdx.x; v < n + m; v += gridDim.x * blockDim.x)
+        encode_one<F>(a, levels, grid, out, v < n ? v : a.top - m + (v - n));
 }
 
 template <int F>

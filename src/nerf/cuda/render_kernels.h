@@ -42,6 +42,11 @@ struct RenderSlots {              // the samples of a round, packed (each live r
     uint8_t* used = nullptr;      // per live ray: samples this round (<= K)
     uint32_t* count = nullptr;    // device: samples this round (zero before the march)
     float4* scratch = nullptr;    // K per live ray: the march's own slots before packing
+    // The path tracer's shadow segments need no colour: their samples are packed down from the top of the
+    // buffers, rows [top - *top_count, top), and the field is evaluated there for density only. Null: none (every
+    // sample from row 0 up, with colour). `top`: the buffers' rows, a multiple of 16.
+    uint32_t* top_count = nullptr;
+    uint32_t top = 0;
 };
 
 // Sets up every pixel's ray; pixels whose ray misses the model are written at once; the others go to
@@ -57,7 +62,14 @@ void render_field_fp32(const NerfFieldView& field, const RenderSlots& slots, con
                        float* sigma, Rgb* rgb, cudaStream_t s);
 // The fused evaluation (hash_encode, then the fp16 tensor-core MLPs: fused_mlp.h) on the round's samples, with
 // colour: `params` the model's fp32 parameters, `mlp_half` its fp16 MLP weights, `encoded` capacity x 32 halves
-// of scratch.
+// of scratch. `capacity` sizes the launches: pass field_rows(), not the whole buffer, or a round of a few samples
+// launches blocks for millions that only find nothing to do (about 15 us a round in each kernel on the H200).
+// The rows a round's field evaluation covers: its samples at most (`most`: live rays x samples each), in whole
+// MLP tiles (128 rows: the MLP reads a tile's padding rows), within the `capacity` rows of the buffers.
+inline uint32_t field_rows(uint64_t most, uint32_t capacity) {
+    const uint64_t tiles = (most + 127) / 128 * 128;
+    return tiles < capacity ? uint32_t(tiles) : capacity;
+}
 void render_field_fp16(const NerfLayout& layout, const float* params, const __half* mlp_half,
                        const RenderSlots& slots, const Vec3* dirs, uint32_t capacity, __half* encoded, float* sigma,
                        Rgb* rgb, cudaStream_t s);

@@ -42,6 +42,9 @@ struct NerfPassTuning {
     // Samples per segment and round at most; rounds double up to it (RenderSlots::used holds 255).
     int max_round = 128;
     int max_warp_round = 255;
+    // Evaluate colour for the shadow segments' samples too (nobody reads it) instead of packing them apart for a
+    // density-only evaluation. NERFPT_PASS_SHADOW_COLOUR=1 sets it (a benchmark knob, to measure the difference).
+    bool shadow_colour = false;
     static NerfPassTuning defaults();
 };
 
@@ -81,7 +84,7 @@ class NerfSegmentPass {
     DeviceBuffer<uint32_t> m_slot_of_volume;
     std::unique_ptr<Buffers> m_buf;
     NerfPassTuning m_tuning = NerfPassTuning::defaults();
-    uint64_t m_segments = 0, m_rounds = 0, m_warp_rounds = 0;
+    uint64_t m_segments = 0, m_shadow_segments = 0, m_rounds = 0, m_warp_rounds = 0;
 };
 
 }  // namespace npt::gpu
