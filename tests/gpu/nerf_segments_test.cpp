@@ -38,12 +38,13 @@ void expect_pass_matches_cpu(const gpu::NerfPassTuning& tuning, const char* what
     const int n = 4000;
     cudaStream_t stream = nullptr;
     ASSERT_EQ(cudaStreamCreate(&stream), cudaSuccess);
-    gpu::NerfSegmentPass pass({host.data(), host.size()}, device.view(), size_t(n), stream);
+    const int done = n / 8;  // paths after them already written to the image: not listed to go on
+    gpu::NerfSegmentPass pass({host.data(), host.size()}, device.view(), size_t(n + done), stream);
     ASSERT_TRUE(pass.any());
     pass.set_tuning(tuning);
     const uint32_t slot_of_volume[1] = {0};
 
-    std::vector<gpu::WavefrontPath> paths(n);
+    std::vector<gpu::WavefrontPath> paths(size_t(n + done));  // phase Done, nothing queued
     std::vector<media::VolumeResult> cpu(n);
     std::vector<int> kind(n);
     int queued = 0;
@@ -67,12 +68,23 @@ void expect_pass_matches_cpu(const gpu::NerfPassTuning& tuning, const char* what
     }
     EXPECT_GT(queued, n / 2);
 
+    std::vector<uint32_t> queue(paths.size());  // what a launch writes beside the paths
+    for (size_t i = 0; i < paths.size(); ++i)
+        queue[i] = gpu::queue_word(paths[i].phase != gpu::PathPhase::Done, paths[i].query[0].slot,
+                                   paths[i].query[1].slot);
     gpu::DeviceBuffer<gpu::WavefrontPath> dev_paths;
     dev_paths.upload(paths);
+    gpu::DeviceBuffer<uint32_t> dev_queue;
+    dev_queue.upload(queue);
     gpu::DeviceBuffer<uint32_t> next;
-    next.allocate(size_t(n));
-    const uint32_t going_on = pass.run(dev_paths.data(), nullptr, uint32_t(n), next.data());
-    EXPECT_EQ(going_on, uint32_t(n));  // every path is in phase Scatter: it goes on
+    next.allocate(paths.size());
+    const uint32_t going_on = pass.run(dev_paths.data(), dev_queue.data(), nullptr, uint32_t(paths.size()), next.data());
+    // The first n paths are in phase Scatter and go on; the done ones do not.
+    ASSERT_EQ(going_on, uint32_t(n));
+    std::vector<uint32_t> listed = next.download();
+    listed.resize(size_t(n));
+    std::sort(listed.begin(), listed.end());
+    for (int i = 0; i < n; ++i) ASSERT_EQ(listed[size_t(i)], uint32_t(i));
     const std::vector<gpu::WavefrontPath> out = dev_paths.download();
     cudaStreamDestroy(stream);
 

@@ -196,7 +196,36 @@ __device__ __forceinline__ void sh_pairs(Vec3 d, int t, uint32_t* lo, uint32_t* 
 }
 
 // Copies the global weights into shared memory: forward rows (padded) and, when `backward`, transposed rows.
+// The forward weights alone (inference), 8 halves a load: the element-wise copy below took about 10 us in a
+// launch of a few rows on the H200 (its loads wait for the stores before them, which may alias), the floor of
+// every small round of the path tracer's NeRF pass. Rows and padded rows are whole multiples of 8 halves.
+__device__ void load_forward_weights(__half* __restrict__ fwd, const __half* __restrict__ w) {
+    using Chunk = uint4;  // 8 halves
+    auto copy = [&](int dst, int src) {
+        *reinterpret_cast<Chunk*>(fwd + dst) = *reinterpret_cast<const Chunk*>(w + src);
+    };
+    for (int i = threadIdx.x; i < 64 * 32 / 8; i += blockDim.x) {
+        const int o = i / 4, k = (i % 4) * 8;
+        copy(FwdW::d0 + o * k_ld32 + k, k_g_d0 + i * 8);
+        copy(FwdW::c0 + o * k_ld32 + k, k_g_c0 + i * 8);
+    }
+    for (int i = threadIdx.x; i < 64 * 64 / 8; i += blockDim.x) {
+        const int o = i / 8, k = (i % 8) * 8;
+        copy(FwdW::c1 + o * k_ld64 + k, k_g_c1 + i * 8);
+    }
+    for (int i = threadIdx.x; i < 16 * 64 / 8; i += blockDim.x) {
+        const int o = i / 8, k = (i % 8) * 8;
+        copy(FwdW::d1 + o * k_ld64 + k, k_g_d1 + i * 8);
+        if (o < 8) copy(FwdW::c2 + o * k_ld64 + k, k_g_c2 + i * 8);
+    }
+    __syncthreads();
+}
+
 __device__ void load_weights(__half* fwd, __half* bwd, const __half* w) {
+    if (!bwd) {
+        load_forward_weights(fwd, w);
+        return;
+    }
     for (int i = threadIdx.x; i < 64 * 32; i += blockDim.x) {
         const int o = i / 32, k = i % 32;
         fwd[FwdW::d0 + o * k_ld32 + k] = w[k_g_d0 + i];

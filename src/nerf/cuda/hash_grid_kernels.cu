@@ -11,6 +11,8 @@ namespace {
 
 constexpr int k_block = 128;
 constexpr int k_dims = 32;  // encoded features per sample
+// Launches for at most this many rows take a thread per sample and level (hash_encode_by_level_kernel).
+constexpr uint32_t k_by_level_below = 1u << 16;
 
 __device__ __forceinline__ uint32_t count_of(const HashGridArgs& a) {
     const uint32_t n = a.count ? *a.count : a.n_host;
@@ -56,49 +58,81 @@ __device__ __forceinline__ void add_features(float* p, const float* v) {
 #endif
 }
 
-template <int F>
-__device__ __forceinline__ void encode_one(const HashGridArgs& a, const HashLevels& levels, const float* grid,
-                                           __half* out, uint32_t i);
+// The rows to encode: [0, n) and the top run [top - m, top) (HashGridArgs::top_count), as one index v < n + m.
+struct EncodeRows {
+    uint32_t n = 0, m = 0, top = 0;
+    __device__ uint32_t count() const { return n + m; }
+    __device__ uint32_t row(uint32_t v) const { return v < n ? v : top - m + (v - n); }
+};
+__device__ __forceinline__ EncodeRows encode_rows(const HashGridArgs& a) {
+    EncodeRows r;
+    r.n = count_of(a);
+    r.top = a.top;
+    if (a.top_count && a.top > r.n) r.m = min(*a.top_count, a.top - r.n);  // within the buffers, clear of [0, n)
+    return r;
+}
 
+// Level l's F features at grid position p (the trilinear sum of its 8 corners), rounded to fp16.
+template <int F>
+__device__ __forceinline__ void encode_level(const HashGridConfig& cfg, const HashLevel& level, int l, const Vec3& p,
+                                             const float* grid, __half* h) {
+    HashCorner corners[8];
+    hash_level_corners(cfg, level, l, p, corners);
+    Features<F> f[8];
+#pragma unroll
+    for (int c = 0; c < 8; ++c) f[c] = load_features<F>(grid + size_t(corners[c].index) * F);
+#pragma unroll
+    for (int k = 0; k < F; ++k) {
+        float acc = 0.0f;
+#pragma unroll
+        for (int c = 0; c < 8; ++c) acc += corners[c].weight * f[c].v[k];
+        h[k] = __float2half_rn(acc);
+    }
+}
+
+// A thread per sample, its levels one after another.
 template <int F>
 __global__ void __launch_bounds__(k_block) hash_encode_kernel(HashGridArgs a, HashLevels levels,
                                                               const float* grid, __half* out) {
-    const uint32_t n = count_of(a);
-    uint32_t m = 0;  // the top run, within the buffers and clear of the bottom one
-    if (a.top_count && a.top > n) m = min(*a.top_count, a.top - n);
-    for (uint32_t v = blockIdx.x * blockDim.x + threadIdx.x; v < n + m; v += gridDim.x * blockDim.x)
-        encode_one<F>(a, levels, grid, out, v < n ? v : a.top - m + (v - n));
+    const EncodeRows rows = encode_rows(a);
+    constexpr int n_levels = k_dims / F;
+    for (uint32_t v = blockIdx.x * blockDim.x + threadIdx.x; v < rows.count(); v += gridDim.x * blockDim.x) {
+        const uint32_t i = rows.row(v);
+        const Vec3 p = a.layout.grid_position(a.positions[i]);
+        __align__(16) __half2 enc[k_dims / 2];
+#pragma unroll
+        for (int l = 0; l < n_levels; ++l)
+            encode_level<F>(a.layout.grid, levels.level[l], l, p, grid, reinterpret_cast<__half*>(enc) + l * F);
+        uint4* dst = reinterpret_cast<uint4*>(out + size_t(i) * k_dims);
+        const uint4* src = reinterpret_cast<const uint4*>(enc);
+#pragma unroll
+        for (int q = 0; q < k_dims / 8; ++q) dst[q] = src[q];
+    }
 }
 
+// A thread per sample and level (blockIdx.y the level), for rounds of few samples: each level is a chain of
+// dependent loads, and a sample's levels then run side by side instead of one after another (a round of a
+// handful of samples took about 17 us in the kernel above on the H200, most of it that chain's latency).
 template <int F>
-__device__ __forceinline__ void encode_one(const HashGridArgs& a, const HashLevels& levels, const float* grid,
-                                           __half* out, uint32_t i) {
-    const HashGridConfig& cfg = a.layout.grid;
-    const Vec3 p = a.layout.grid_position(a.positions[i]);
-    constexpr int n_levels = k_dims / F;
-    __align__(16) __half2 enc[k_dims / 2];
+__global__ void __launch_bounds__(k_block) hash_encode_by_level_kernel(HashGridArgs a, HashLevels levels,
+                                                                       const float* grid, __half* out) {
+    const EncodeRows rows = encode_rows(a);
+    const int l = int(blockIdx.y);
+    const HashLevel level = levels.level[l];
+    for (uint32_t v = blockIdx.x * blockDim.x + threadIdx.x; v < rows.count(); v += gridDim.x * blockDim.x) {
+        const uint32_t i = rows.row(v);
+        __align__(16) __half h[F < 4 ? 4 : F];
+        encode_level<F>(a.layout.grid, level, l, a.layout.grid_position(a.positions[i]), grid, h);
+        __half* dst = out + size_t(i) * k_dims + size_t(l) * F;
+        if constexpr (F == 8) {
+            *reinterpret_cast<uint4*>(dst) = *reinterpret_cast<const uint4*>(h);
+        } else if constexpr (F == 4) {
+            *reinterpret_cast<uint2*>(dst) = *reinterpret_cast<const uint2*>(h);
+        } else {
 #pragma unroll
-    for (int l = 0; l < n_levels; ++l) {
-        HashCorner corners[8];
-        hash_level_corners(cfg, levels.level[l], l, p, corners);
-        Features<F> f[8];
-#pragma unroll
-        for (int c = 0; c < 8; ++c) f[c] = load_features<F>(grid + size_t(corners[c].index) * F);
-        float acc[F];
-#pragma unroll
-        for (int k = 0; k < F; ++k) {
-            acc[k] = 0.0f;
-#pragma unroll
-            for (int c = 0; c < 8; ++c) acc[k] += corners[c].weight * f[c].v[k];
+            for (int k = 0; k < F; ++k) dst[k] = h[k];
         }
-        __half* h = reinterpret_cast<__half*>(enc) + l * F;
-#pragma unroll
-        for (int k = 0; k < F; ++k) h[k] = __float2half_rn(acc[k]);
     }
-    uint4* dst = reinterpret_cast<uint4*>(out + size_t(i) * k_dims);
-    const uint4* src = reinterpret_cast<const uint4*>(enc);
-#pragma unroll
-    for (int q = 0; q < k_dims / 8; ++q) dst[q] = src[q];
 }
 
 // Sums v over runs of consecutive lanes with the same idx (a segmented scan over the warp); returns true in
@@ -203,6 +237,17 @@ uint32_t merge_levels_of(const HashGridConfig& cfg) {
     return mask;
 }
 
+template <int F>
+void launch_encode(const HashGridArgs& a, const HashLevels& levels, const float* grid, __half* out, cudaStream_t s) {
+    const int blocks = blocks_for(a.capacity);
+    if (a.capacity <= k_by_level_below) {
+        const dim3 per_level(unsigned(blocks), unsigned(k_dims / F));  // a row of blocks per level
+        hash_encode_by_level_kernel<F><<<per_level, k_block, 0, s>>>(a, levels, grid, out);
+    } else {
+        hash_encode_kernel<F><<<blocks, k_block, 0, s>>>(a, levels, grid, out);
+    }
+}
+
 void check_config(const NerfLayout& l) {
     const int f = l.grid.features_per_level;
     if (l.grid.output_dims() != k_dims || (f != 1 && f != 2 && f != 4 && f != 8))
@@ -216,12 +261,11 @@ void hash_encode(const HashGridArgs& a, const float* grid_params, __half* encode
     check_config(a.layout);
     if (a.capacity == 0) return;
     const HashLevels levels = hash_levels(a.layout.grid);
-    const int blocks = blocks_for(a.capacity);
     switch (a.layout.grid.features_per_level) {
-        case 1: hash_encode_kernel<1><<<blocks, k_block, 0, s>>>(a, levels, grid_params, encoded); break;
-        case 2: hash_encode_kernel<2><<<blocks, k_block, 0, s>>>(a, levels, grid_params, encoded); break;
-        case 4: hash_encode_kernel<4><<<blocks, k_block, 0, s>>>(a, levels, grid_params, encoded); break;
-        default: hash_encode_kernel<8><<<blocks, k_block, 0, s>>>(a, levels, grid_params, encoded); break;
+        case 1: launch_encode<1>(a, levels, grid_params, encoded, s); break;
+        case 2: launch_encode<2>(a, levels, grid_params, encoded, s); break;
+        case 4: launch_encode<4>(a, levels, grid_params, encoded, s); break;
+        default: launch_encode<8>(a, levels, grid_params, encoded, s); break;
     }
     NPT_CUDA_CHECK_LAUNCH("hash_encode_kernel");
 }

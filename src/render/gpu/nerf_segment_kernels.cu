@@ -45,7 +45,7 @@ __device__ __forceinline__ bool finish_or_keep(const NerfSegmentModel& m, Wavefr
     return true;
 }
 
-__global__ void __launch_bounds__(k_block) gather_kernel(WavefrontPath* paths, const uint32_t* active, uint32_t n,
+__global__ void __launch_bounds__(k_block) gather_kernel(const uint32_t* queue, const uint32_t* active, uint32_t n,
                                                           uint32_t* next, uint32_t* next_count, SegmentLists lists) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     const bool in = i < n;
@@ -53,10 +53,10 @@ __global__ void __launch_bounds__(k_block) gather_kernel(WavefrontPath* paths, c
     uint32_t slot[2] = {k_no_query, k_no_query};
     bool go_on = false;
     if (in) {
-        const WavefrontPath& p = paths[id];
-        go_on = p.phase != PathPhase::Done;
-        slot[0] = p.query[0].slot;
-        slot[1] = p.query[1].slot;
+        const uint32_t word = queue[id];
+        go_on = queue_going_on(word);
+        slot[0] = queue_slot(word, 0);
+        slot[1] = queue_slot(word, 1);
     }
     warp_append(go_on, id, next, next_count);
     const unsigned shadows = __ballot_sync(0xffffffffu, slot[1] != k_no_query);
@@ -208,10 +208,10 @@ __global__ void __launch_bounds__(k_block) warp_composite_kernel(NerfSegmentMode
 
 }  // namespace
 
-void segment_gather(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next, uint32_t* next_count,
+void segment_gather(const uint32_t* queue, const uint32_t* active, uint32_t n, uint32_t* next, uint32_t* next_count,
                     const SegmentLists& lists, cudaStream_t s) {
     if (n == 0) return;
-    gather_kernel<<<blocks_for(n), k_block, 0, s>>>(paths, active, n, next, next_count, lists);
+    gather_kernel<<<blocks_for(n), k_block, 0, s>>>(queue, active, n, next, next_count, lists);
     NPT_CUDA_CHECK_LAUNCH("segment gather_kernel");
 }
 

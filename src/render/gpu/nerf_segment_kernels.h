@@ -39,7 +39,8 @@ struct SegmentLists {
 };
 
 // The paths of `active` (null: 0 .. n-1) that are not done go to `next`; their queued segments to the lists.
-void segment_gather(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next, uint32_t* next_count,
+// From each path's queue_word (wavefront.h).
+void segment_gather(const uint32_t* queue, const uint32_t* active, uint32_t n, uint32_t* next, uint32_t* next_count,
                     const SegmentLists& lists, cudaStream_t s);
 // Starts the march of each of the n segments of `list`; a segment with nothing to march is written back at once
 // (no emission, T = 1), the others go to `live`.

@@ -69,6 +69,7 @@ NerfSegmentPass::NerfSegmentPass(Span<const media::VolumeView> host, Span<const 
     for (size_t i = 0; i < host.size; ++i) {
         const media::VolumeView& v = host[i];
         if (v.kind != media::VolumeKind::Nerf) continue;
+        if (m_models.size() + 1 >= k_max_queue_slot) continue;  // (32766 NeRFs in a scene) integrated inline
         std::string why;
         if (!nerf::cuda::mlp_shape_supported(v.nerf.field.layout, &why)) continue;  // integrated inline
         NerfSegmentModel m;
@@ -133,12 +134,13 @@ uint32_t NerfSegmentPass::read(const uint32_t* device_count) {
     return v;
 }
 
-uint32_t NerfSegmentPass::run(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next) {
+uint32_t NerfSegmentPass::run(WavefrontPath* paths, const uint32_t* queue, const uint32_t* active, uint32_t n,
+                              uint32_t* next) {
     Buffers& b = *m_buf;
     const uint32_t lists = uint32_t(m_models.size());
     cuda_check(cudaMemsetAsync(b.counts.data(), 0, b.counts.bytes(), m_stream), "cudaMemsetAsync");
     SegmentLists l{b.lists.data(), b.counts.data() + k_list_counts, uint32_t(b.segments), lists, b.counts.data() + 5};
-    segment_gather(paths, active, n, next, b.counts.data(), l, m_stream);
+    segment_gather(queue, active, n, next, b.counts.data(), l, m_stream);
     cuda_check(cudaMemcpyAsync(b.host_counts.data(), b.counts.data(), b.counts.bytes(), cudaMemcpyDeviceToHost,
                                m_stream),
                "cudaMemcpyAsync");

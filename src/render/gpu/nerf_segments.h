@@ -63,9 +63,9 @@ class NerfSegmentPass {
     // Per scene volume: its slot, or k_no_query (device array, WavefrontParams::nerf_slot).
     const uint32_t* nerf_slots() const { return m_slot_of_volume.data(); }
 
-    // The n paths of `active` (null: paths 0 .. n-1) after a launch: those that go on are listed in `next`
-    // (returned: how many), and every queued segment is evaluated into its path.
-    uint32_t run(WavefrontPath* paths, const uint32_t* active, uint32_t n, uint32_t* next);
+    // The n paths of `active` (null: paths 0 .. n-1) after a launch, `queue` their queue_words: those that go on
+    // are listed in `next` (returned: how many), and every queued segment is evaluated into its path.
+    uint32_t run(WavefrontPath* paths, const uint32_t* queue, const uint32_t* active, uint32_t n, uint32_t* next);
 
     // Since the last call: segments evaluated and rounds; then the counts restart.
     std::string stats();

@@ -19,6 +19,7 @@ WavefrontLoop::WavefrontLoop(Span<const media::VolumeView> host, Span<const medi
     : m_stream(stream), m_pass(host, device, max_paths, stream) {
     if (!m_pass.any()) return;
     m_paths.allocate(max_paths, "the path states", "--res or --spp");
+    m_queue.allocate(max_paths, "the path states", "--res or --spp");
     m_active[0].allocate(max_paths, "the path states", "--res or --spp");
     m_active[1].allocate(max_paths, "the path states", "--res or --spp");
 }
@@ -30,6 +31,7 @@ void WavefrontLoop::run_wave(LaunchParams p, uint32_t slots, const OptixPrograms
         throw Error("WavefrontLoop: a wave of " + std::to_string(n) + " paths, built for " +
                     std::to_string(m_paths.size()));
     p.wave.paths = m_paths.data();
+    p.wave.queue = m_queue.data();
     p.wave.nerf_slot = m_pass.nerf_slots();
     p.sample_count = slots;
     auto launch = [&](const uint32_t* active, uint32_t count) {
@@ -62,7 +64,7 @@ void WavefrontLoop::run_wave(LaunchParams p, uint32_t slots, const OptixPrograms
         launched += live;
         ++launches;
         uint32_t next = 0;
-        timed(pass_s, [&] { next = m_pass.run(m_paths.data(), active, live, m_active[cur].data()); });
+        timed(pass_s, [&] { next = m_pass.run(m_paths.data(), m_queue.data(), active, live, m_active[cur].data()); });
         active = m_active[cur].data();
         live = next;
     }

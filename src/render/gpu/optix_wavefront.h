@@ -33,6 +33,7 @@ class WavefrontLoop {
     NerfSegmentPass m_pass;
     DeviceBuffer<WavefrontPath> m_paths;
     DeviceBuffer<uint32_t> m_active[2];
+    DeviceBuffer<uint32_t> m_queue;  // per path: its queue_word (wavefront.h)
 };
 
 }  // namespace npt::gpu

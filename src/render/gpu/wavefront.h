@@ -28,6 +28,21 @@ struct NerfQuery {
     uint32_t slot = k_no_query;
 };
 
+// What the NeRF pass's gather reads of a path after a launch, one word per path: whether the path goes on and
+// each query's slot (the whole path state, about 250 bytes a path, read for these cost the gather 60-150 us a
+// launch at 1080p on the H200). Slots at most k_max_queue_slot - 1: the pass takes no more NeRFs than that.
+constexpr uint32_t k_max_queue_slot = 0x7fffu;
+NPT_HD NPT_INLINE uint32_t queue_word(bool going_on, uint32_t slot0, uint32_t slot1) {
+    const uint32_t s0 = slot0 == k_no_query ? k_max_queue_slot : slot0;
+    const uint32_t s1 = slot1 == k_no_query ? k_max_queue_slot : slot1;
+    return (going_on ? 0x80000000u : 0u) | (s1 << 15) | s0;
+}
+NPT_HD NPT_INLINE bool queue_going_on(uint32_t word) { return (word >> 31) != 0; }
+NPT_HD NPT_INLINE uint32_t queue_slot(uint32_t word, int kind) {
+    const uint32_t s = (word >> (15 * kind)) & k_max_queue_slot;
+    return s == k_max_queue_slot ? k_no_query : s;
+}
+
 enum class PathPhase : uint8_t {
     Scatter,  // the segment in front of `hit` is known (or queued): path_scatter next
     Finish,   // ended, but a shadow ray's transmittance is still queued
@@ -55,6 +70,7 @@ struct WavefrontPath {
 struct WavefrontParams {
     WavefrontPath* paths = nullptr;
     const uint32_t* active = nullptr;  // the paths of this launch; null in the first launch of a wave
+    uint32_t* queue = nullptr;         // per path: its queue_word after the launch
     // Which volumes the NeRF pass takes: per scene volume, its slot in the pass, or k_no_query (grids, and NeRFs
     // the pass cannot evaluate; these are integrated inline).
     const uint32_t* nerf_slot = nullptr;

@@ -141,9 +141,11 @@ extern "C" __global__ void __raygen__wavefront() {
         begin_segment(p, sampler, tracer);
         p.sampler = sampler;
         w.paths[i] = p;
+        w.queue[i] = gpu::queue_word(true, p.query[0].slot, gpu::k_no_query);
         return;
     }
-    gpu::WavefrontPath& slot = w.paths[w.active[i]];
+    const uint32_t id = w.active[i];
+    gpu::WavefrontPath& slot = w.paths[id];
     gpu::WavefrontPath p = slot;
     SobolSampler sampler = p.sampler;
     p.query[0].slot = p.query[1].slot = gpu::k_no_query;
@@ -182,6 +184,7 @@ extern "C" __global__ void __raygen__wavefront() {
     }
     p.sampler = sampler;
     slot = p;
+    w.queue[id] = gpu::queue_word(p.phase != gpu::PathPhase::Done, p.query[0].slot, p.query[1].slot);
 }
 
 extern "C" __global__ void __closesthit__radiance() {
