@@ -18,6 +18,7 @@
 #include <system_error>
 
 #include "core/error.h"
+#include "core/exr_header_check.h"
 #include "core/memory.h"
 #include "core/temp_file.h"
 
@@ -111,6 +112,7 @@ bool has_exr_magic(const unsigned char* data, size_t size) {
 
 Image read_exr(const fs::path& path) {
     const std::string name = path.string();
+    check_exr_header(path);
     try {
         Imf::InputFile file(name.c_str());
         const Imath::Box2i dw = file.header().dataWindow();
