@@ -7,8 +7,7 @@
 # (GTEST_FILTER='*' runs every GPU test, not only the OptiX and shared-maths ones).
 set -uo pipefail
 # NERFPT_OPTIX_WAVEFRONT=0 / NERFPT_WAVEFRONT_STATS=1: the NeRF demo without and with the wavefront form's
-# breakdown (render/gpu/optix_wavefront.cpp); NERFPT_SEGMENT_WARP_BELOW=0: the NeRF pass without its warp rounds;
-# NERFPT_PASS_SHADOW_COLOUR=1: the shadow segments' samples evaluated with colour.
+# breakdown (render/gpu/optix_wavefront.cpp); NERFPT_SEGMENT_WARP_BELOW=0: the NeRF pass without its warp rounds.
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_out}
 mkdir -p "$out"
@@ -37,11 +36,6 @@ NERFPT_SEGMENT_WARP_BELOW=0 bench --res 1920x1080 --spp 1 --repeats 2 --frames 2
 NERFPT_SEGMENT_WARP_BELOW=0 NERFPT_WAVEFRONT_STATS=1 timeout 60 $bin/render_bench --backend optix --res 1920x1080 \
     --spp 1 --repeats 1 --frames 3 --scene-file $demo/scene.gltf 2>&1 | grep -E "wavefront" | sed 's/^/thread rounds only: /' |
     tee -a "$out/wavefront_stats.log"
-# The shadow segments' samples evaluated with colour among the others, then the default (density only) again:
-# an A/B pair.
-echo "== shadow samples with colour (NERFPT_PASS_SHADOW_COLOUR=1), then the default again" | tee -a "$out/render_bench.log"
-NERFPT_PASS_SHADOW_COLOUR=1 bench --res 1920x1080 --spp 1 --repeats 3 --frames 20 --scene-file $demo/scene.gltf
-bench --res 1920x1080 --spp 1 --repeats 3 --frames 20 --scene-file $demo/scene.gltf
 # NeRF only (a volume cube, grey background) through the path tracer, and nerfpt view of the same model.
 bench --res 800x800 --spp 1 --repeats 3 --frames 50 --scene-file $demo/scene.json
 NERFPT_WAVEFRONT_STATS=1 timeout 60 $bin/render_bench --backend optix --res 800x800 --spp 1 --repeats 1 --frames 3 \

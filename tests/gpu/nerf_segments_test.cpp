@@ -143,14 +143,5 @@ TEST(NerfSegments, ThreadRoundsAndWarpRoundsEachMatchTheCpu) {
     expect_pass_matches_cpu(warps, "a warp per segment");
 }
 
-// The shadow segments' samples evaluated with colour among the others (NerfPassTuning::shadow_colour) instead of
-// packed apart for density only (the defaults): the same results.
-TEST(NerfSegments, ShadowSamplesWithColourMatchTheCpuToo) {
-    ASSERT_TRUE(gpu::device_available());
-    gpu::NerfPassTuning t;
-    t.shadow_colour = true;
-    expect_pass_matches_cpu(t, "shadow samples with colour");
-}
-
 }  // namespace
 }  // namespace npt

@@ -128,8 +128,8 @@ void CudaViewRenderer::Impl::run(const Camera& camera, const ViewOptions& option
             const NerfFieldView field(layout, params.data());
             render_field_fp32(field, slots, dirs.data(), m, slot_sigma.data(), slot_rgb.data(), stream);
         } else {
-            render_field_fp16(layout, params.data(), mlp_half.data(), slots, dirs.data(), field_rows(m, capacity), slot_enc.data(),
-                              slot_sigma.data(), slot_rgb.data(), stream);
+            render_field_fp16(layout, params.data(), mlp_half.data(), slots, dirs.data(), field_rows(m, capacity),
+                              slot_enc.data(), slot_sigma.data(), slot_rgb.data(), stream);
         }
         const int nxt = 1 - cur;
         cuda_check(cudaMemsetAsync(counts.data() + nxt, 0, sizeof(uint32_t), stream), "cudaMemsetAsync");

@@ -307,59 +307,44 @@ __device__ __forceinline__ void forward(const uint32_t (&x0)[2][4], const __half
 
 constexpr size_t k_infer_smem = size_t(FwdW::total) * 2;
 
-// The warp's 16 rows from row0 on; rows in [lo, hi) are written (the others are another run's, or padding).
-template <bool density_only>
-__device__ __forceinline__ void infer_slice(const MlpInferenceArgs& a, const __half* w, Lane l, uint32_t row0,
-                                            uint32_t lo, uint32_t hi) {
-    uint32_t x0[2][4];
-    load_a(x0, a.encoded + size_t(row0) * k_mlp_inputs, k_mlp_inputs, l);
-    auto dir = [&](int r) {
-        const uint32_t row = row0 + uint32_t(r);
-        return row >= lo && row < hi ? a.ray_dir[a.sample_ray[row]] : Vec3(0.0f, 0.0f, 1.0f);
-    };
-    float raw0[2], col[1][4];
-    forward<density_only, false>(x0, w, l, dir, raw0, col, KeepRows{});
-    const uint32_t r0 = row0 + uint32_t(l.g), r1 = r0 + 8;
-    const bool in0 = r0 >= lo && r0 < hi, in1 = r1 >= lo && r1 < hi;
-    if (l.t == 0) {
-        if (in0) a.sigma[r0] = density_activation(raw0[0]);
-        if (in1) a.sigma[r1] = density_activation(raw0[1]);
-    }
-    if constexpr (!density_only) {
-        // Lane t = 0 holds colours 0 and 1, lane t = 1 colour 2 (and the zero padding column 3).
-        if (l.t < 2) {
-            float* c0 = reinterpret_cast<float*>(a.rgb + (in0 ? r0 : 0));
-            float* c1 = reinterpret_cast<float*>(a.rgb + (in1 ? r1 : 0));
-            if (l.t == 0) {
-                if (in0) c0[0] = sigmoidf(col[0][0]), c0[1] = sigmoidf(col[0][1]);
-                if (in1) c1[0] = sigmoidf(col[0][2]), c1[1] = sigmoidf(col[0][3]);
-            } else {
-                if (in0) c0[2] = sigmoidf(col[0][0]);
-                if (in1) c1[2] = sigmoidf(col[0][2]);
-            }
-        }
-    }
-}
-
 template <bool density_only>
 __global__ void __launch_bounds__(k_threads) mlp_inference_kernel(MlpInferenceArgs a) {
     extern __shared__ __align__(128) unsigned char smem[];
     __half* w = reinterpret_cast<__half*>(smem);
     load_weights(w, nullptr, a.weights);
     const uint32_t n = sample_count(a.count, a.n_host, a.capacity);
-    // The top run (density only): its slices start at the 16-row boundary below it. Rows past n, and below the
-    // top run in its first slice, read the buffers' padding or the other run's rows and are not written back.
-    uint32_t m = 0;
-    if (a.top_count && a.top > n) m = min(*a.top_count, a.top - n);
-    const uint32_t top_begin = a.top - m, top_row0 = top_begin & ~15u;
-    const uint32_t slices = (n + 15) / 16, top_slices = m ? (a.top - top_row0) / 16 : 0u;
     const Lane l = lane_id();
     const uint32_t warps = gridDim.x * k_warps;
-    for (uint32_t slice = blockIdx.x * k_warps + (threadIdx.x >> 5); slice < slices + top_slices; slice += warps) {
-        if (slice < slices)
-            infer_slice<density_only>(a, w, l, slice * 16, 0u, n);
-        else
-            infer_slice<true>(a, w, l, top_row0 + (slice - slices) * 16, top_begin, a.top);
+    for (uint32_t slice = blockIdx.x * k_warps + (threadIdx.x >> 5); size_t(slice) * 16 < n; slice += warps) {
+        const uint32_t row0 = slice * 16;
+        // Rows past n read the buffer's padding (capacity is whole tiles) and are not written back.
+        uint32_t x0[2][4];
+        load_a(x0, a.encoded + size_t(row0) * k_mlp_inputs, k_mlp_inputs, l);
+        auto dir = [&](int r) {
+            const uint32_t row = row0 + uint32_t(r);
+            return row < n ? a.ray_dir[a.sample_ray[row]] : Vec3(0.0f, 0.0f, 1.0f);
+        };
+        float raw0[2], col[1][4];
+        forward<density_only, false>(x0, w, l, dir, raw0, col, KeepRows{});
+        const uint32_t r0 = row0 + uint32_t(l.g), r1 = r0 + 8;
+        if (l.t == 0) {
+            if (r0 < n) a.sigma[r0] = density_activation(raw0[0]);
+            if (r1 < n) a.sigma[r1] = density_activation(raw0[1]);
+        }
+        if constexpr (!density_only) {
+            // Lane t = 0 holds colours 0 and 1, lane t = 1 colour 2 (and the zero padding column 3).
+            if (l.t < 2) {
+                float* c0 = reinterpret_cast<float*>(a.rgb + (r0 < n ? r0 : 0));
+                float* c1 = reinterpret_cast<float*>(a.rgb + (r1 < n ? r1 : 0));
+                if (l.t == 0) {
+                    if (r0 < n) c0[0] = sigmoidf(col[0][0]), c0[1] = sigmoidf(col[0][1]);
+                    if (r1 < n) c1[0] = sigmoidf(col[0][2]), c1[1] = sigmoidf(col[0][3]);
+                } else {
+                    if (r0 < n) c0[2] = sigmoidf(col[0][0]);
+                    if (r1 < n) c1[2] = sigmoidf(col[0][2]);
+                }
+            }
+        }
     }
 }
 

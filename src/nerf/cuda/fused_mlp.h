@@ -42,10 +42,6 @@ struct MlpInferenceArgs {
     uint32_t capacity = 0;               // rows the buffers hold (n is clamped to it)
     float* sigma = nullptr;              // [n] activated density (exp)
     Rgb* rgb = nullptr;                  // [n] sigmoid colour; untouched when density_only
-    // A second run of rows packed down from the top of the buffers, [top - *top_count, top), evaluated for density
-    // only (the path tracer's shadow samples: see RenderSlots); null: none. `top` a multiple of 16.
-    const uint32_t* top_count = nullptr;
-    uint32_t top = 0;
 };
 void mlp_inference(const MlpInferenceArgs& a, bool density_only, cudaStream_t stream);
 

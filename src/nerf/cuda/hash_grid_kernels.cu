@@ -58,20 +58,6 @@ __device__ __forceinline__ void add_features(float* p, const float* v) {
 #endif
 }
 
-// The rows to encode: [0, n) and the top run [top - m, top) (HashGridArgs::top_count), as one index v < n + m.
-struct EncodeRows {
-    uint32_t n = 0, m = 0, top = 0;
-    __device__ uint32_t count() const { return n + m; }
-    __device__ uint32_t row(uint32_t v) const { return v < n ? v : top - m + (v - n); }
-};
-__device__ __forceinline__ EncodeRows encode_rows(const HashGridArgs& a) {
-    EncodeRows r;
-    r.n = count_of(a);
-    r.top = a.top;
-    if (a.top_count && a.top > r.n) r.m = min(*a.top_count, a.top - r.n);  // within the buffers, clear of [0, n)
-    return r;
-}
-
 // Level l's F features at grid position p (the trilinear sum of its 8 corners), rounded to fp16.
 template <int F>
 __device__ __forceinline__ void encode_level(const HashGridConfig& cfg, const HashLevel& level, int l, const Vec3& p,
@@ -94,10 +80,9 @@ __device__ __forceinline__ void encode_level(const HashGridConfig& cfg, const Ha
 template <int F>
 __global__ void __launch_bounds__(k_block) hash_encode_kernel(HashGridArgs a, HashLevels levels,
                                                               const float* grid, __half* out) {
-    const EncodeRows rows = encode_rows(a);
+    const uint32_t n = count_of(a);
     constexpr int n_levels = k_dims / F;
-    for (uint32_t v = blockIdx.x * blockDim.x + threadIdx.x; v < rows.count(); v += gridDim.x * blockDim.x) {
-        const uint32_t i = rows.row(v);
+    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < n; i += gridDim.x * blockDim.x) {
         const Vec3 p = a.layout.grid_position(a.positions[i]);
         __align__(16) __half2 enc[k_dims / 2];
 #pragma unroll
@@ -116,11 +101,10 @@ __global__ void __launch_bounds__(k_block) hash_encode_kernel(HashGridArgs a, Ha
 template <int F>
 __global__ void __launch_bounds__(k_block) hash_encode_by_level_kernel(HashGridArgs a, HashLevels levels,
                                                                        const float* grid, __half* out) {
-    const EncodeRows rows = encode_rows(a);
+    const uint32_t n = count_of(a);
     const int l = int(blockIdx.y);
     const HashLevel level = levels.level[l];
-    for (uint32_t v = blockIdx.x * blockDim.x + threadIdx.x; v < rows.count(); v += gridDim.x * blockDim.x) {
-        const uint32_t i = rows.row(v);
+    for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < n; i += gridDim.x * blockDim.x) {
         __align__(16) __half h[F < 4 ? 4 : F];
         encode_level<F>(a.layout.grid, level, l, a.layout.grid_position(a.positions[i]), grid, h);
         __half* dst = out + size_t(i) * k_dims + size_t(l) * F;

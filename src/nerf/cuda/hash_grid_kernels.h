@@ -19,10 +19,6 @@ struct HashGridArgs {
     const uint32_t* count = nullptr;   // device: n; when null, n_host is used
     uint32_t n_host = 0;
     uint32_t capacity = 0;
-    // A second run of samples packed down from the top of the buffers (the path tracer's shadow samples: see
-    // RenderSlots): rows [top - *top_count, top) are encoded too; null: none. Forward only.
-    const uint32_t* top_count = nullptr;
-    uint32_t top = 0;
 };
 
 // Requires layout.grid.output_dims() == 32 and features_per_level in {1, 2, 4, 8}.

@@ -9,19 +9,11 @@
 
 namespace npt::nerf::cuda {
 
-// Where a reservation of `used` samples starts: from row 0 up, or (on_top, with slots.top_count) in the run packed
-// down from slots.top, where `reserved` is the run's count before it.
-__device__ __forceinline__ uint32_t slot_base(const RenderSlots& slots, bool on_top, uint32_t reserved,
-                                              uint32_t used) {
-    return on_top ? slots.top - reserved - used : reserved;
-}
-
 // Item a of the round's live list marches `ray` from cursor c and packs its samples under `owner` (the index of its
-// direction for the MLP): from row 0 up, or on_top (density only; with slots.top_count) from slots.top down. Every
-// lane of the warp must call it; `live` is false for lanes without an item.
+// direction for the MLP). Every lane of the warp must call it; `live` is false for lanes without an item.
 __device__ __forceinline__ void march_into_slots(bool live, uint32_t a, uint32_t owner, const MarchParams& mp,
                                                  const OccupancyGridView& grid, const Ray& ray, MarchCursor& c,
-                                                 int k, const RenderSlots& slots, bool on_top = false) {
+                                                 int k, const RenderSlots& slots) {
     int used = 0;
     float4* mine = slots.scratch + size_t(a) * size_t(k);
     if (live)
@@ -29,14 +21,7 @@ __device__ __forceinline__ void march_into_slots(bool live, uint32_t a, uint32_t
             mine[used++] = make_float4(s.position.x, s.position.y, s.position.z, s.dt);
             return used < k;
         });
-    uint32_t base;
-    if (slots.top_count) {  // the same in every lane: both reservations are the warp's
-        const uint32_t bottom = gpu::warp_reserve(on_top ? 0u : uint32_t(used), slots.count);
-        const uint32_t from_top = gpu::warp_reserve(on_top ? uint32_t(used) : 0u, slots.top_count);
-        base = on_top ? slot_base(slots, true, from_top, uint32_t(used)) : bottom;
-    } else {
-        base = gpu::warp_reserve(uint32_t(used), slots.count);
-    }
+    const uint32_t base = gpu::warp_reserve(uint32_t(used), slots.count);
     if (!live) return;
     for (int q = 0; q < used; ++q) {
         const float4 v = mine[q];
@@ -60,10 +45,10 @@ namespace npt::nerf::cuda {
 // exit of the empty cell before it: a point whose predecessor is empty is taken only where the skip from that
 // predecessor reaches it). Where a chunk of 32 ends in an empty cell the march jumps on from its last point by
 // the same skip. Every lane calls it with the same arguments and cursor and leaves with the same cursor; lane 0
-// writes slots.first/used[a]. on_top as in march_into_slots.
+// writes slots.first/used[a].
 __device__ __forceinline__ void warp_march_into_slots(uint32_t a, uint32_t owner, const MarchParams& mp,
                                                       const OccupancyGridView& grid, const Ray& ray, MarchCursor& c,
-                                                      int k, const RenderSlots& slots, bool on_top = false) {
+                                                      int k, const RenderSlots& slots) {
     constexpr unsigned all = 0xffffffffu;
     const int lane = int(threadIdx.x & 31);
     const unsigned below = (1u << lane) - 1u;
@@ -135,11 +120,7 @@ __device__ __forceinline__ void warp_march_into_slots(uint32_t a, uint32_t owner
     }
     __syncwarp();  // the lanes wrote `mine`; they copy it below in another order
     uint32_t base = 0;
-    on_top = on_top && slots.top_count;
-    if (lane == 0 && used > 0) {
-        const uint32_t reserved = atomicAdd(on_top ? slots.top_count : slots.count, uint32_t(used));
-        base = slot_base(slots, on_top, reserved, uint32_t(used));
-    }
+    if (lane == 0 && used > 0) base = atomicAdd(slots.count, uint32_t(used));
     base = __shfl_sync(all, base, 0);
     for (int q = lane; q < used; q += 32) {
         const float4 v = mine[q];

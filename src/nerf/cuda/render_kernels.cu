@@ -132,8 +132,6 @@ void render_field_fp16(const NerfLayout& layout, const float* params, const __ha
     h.positions = slots.pos;
     h.count = slots.count;
     h.capacity = capacity;
-    h.top_count = slots.top_count;
-    h.top = slots.top;
     hash_encode(h, params + layout.grid_offset, encoded, s);
     MlpInferenceArgs a;
     a.weights = mlp_half;
@@ -144,8 +142,6 @@ void render_field_fp16(const NerfLayout& layout, const float* params, const __ha
     a.capacity = capacity;
     a.sigma = sigma;
     a.rgb = rgb;
-    a.top_count = slots.top_count;
-    a.top = slots.top;
     mlp_inference(a, false, s);
 }
 

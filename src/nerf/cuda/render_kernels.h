@@ -42,11 +42,6 @@ struct RenderSlots {              // the samples of a round, packed (each live r
     uint8_t* used = nullptr;      // per live ray: samples this round (<= K)
     uint32_t* count = nullptr;    // device: samples this round (zero before the march)
     float4* scratch = nullptr;    // K per live ray: the march's own slots before packing
-    // The path tracer's shadow segments need no colour: their samples are packed down from the top of the
-    // buffers, rows [top - *top_count, top), and the field is evaluated there for density only. Null: none (every
-    // sample from row 0 up, with colour). `top`: the buffers' rows, a multiple of 16.
-    uint32_t* top_count = nullptr;
-    uint32_t top = 0;
 };
 
 // Sets up every pixel's ray; pixels whose ray misses the model are written at once; the others go to

@@ -92,10 +92,7 @@ __global__ void __launch_bounds__(k_block) start_kernel(NerfSegmentModel m, Wave
     warp_append(marching, j, live, live_count);
 }
 
-// A shadow segment's samples need no colour: they go to the density-only run (when the slots have one).
-__device__ __forceinline__ bool density_only(const uint32_t* list, uint32_t j) { return segment_kind(list[j]) == 1; }
-
-__global__ void __launch_bounds__(k_block) march_kernel(NerfSegmentModel m, const uint32_t* list, SegmentState* states,
+__global__ void __launch_bounds__(k_block) march_kernel(NerfSegmentModel m, SegmentState* states,
                                                          const uint32_t* live, uint32_t n, int k,
                                                          nerf::cuda::RenderSlots samples) {
     const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
@@ -103,13 +100,11 @@ __global__ void __launch_bounds__(k_block) march_kernel(NerfSegmentModel m, cons
     const uint32_t j = in ? live[a] : 0u;
     nerf::MarchCursor c;
     Ray ray{};
-    bool shadow = false;
     if (in) {
         c = states[j].cursor;  // in registers while marching
         ray = states[j].ray;
-        shadow = density_only(list, j);
     }
-    nerf::cuda::march_into_slots(in, a, j, m.march, m.grid, ray, c, k, samples, shadow);
+    nerf::cuda::march_into_slots(in, a, j, m.march, m.grid, ray, c, k, samples);
     if (in) states[j].cursor = c;
 }
 
@@ -137,15 +132,15 @@ __global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, 
 
 // The warp forms of march and composite (one live segment per warp), for the rounds whose few long segments a
 // thread each would march and composite as long dependent chains.
-__global__ void __launch_bounds__(k_block) warp_march_kernel(NerfSegmentModel m, const uint32_t* list,
-                                                              SegmentState* states, const uint32_t* live, uint32_t n,
-                                                              int k, nerf::cuda::RenderSlots samples) {
+__global__ void __launch_bounds__(k_block) warp_march_kernel(NerfSegmentModel m, SegmentState* states,
+                                                              const uint32_t* live, uint32_t n, int k,
+                                                              nerf::cuda::RenderSlots samples) {
     const uint32_t a = (blockIdx.x * blockDim.x + threadIdx.x) / 32;
     if (a >= n) return;  // a whole warp
     const uint32_t j = live[a];
     nerf::MarchCursor c = states[j].cursor;
     const Ray ray = states[j].ray;
-    nerf::cuda::warp_march_into_slots(a, j, m.march, m.grid, ray, c, k, samples, density_only(list, j));
+    nerf::cuda::warp_march_into_slots(a, j, m.march, m.grid, ray, c, k, samples);
     if ((threadIdx.x & 31) == 0) states[j].cursor = c;
 }
 
@@ -222,15 +217,15 @@ void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32
     NPT_CUDA_CHECK_LAUNCH("segment start_kernel");
 }
 
-void segment_march(const NerfSegmentModel& m, const uint32_t* list, SegmentState* states, const uint32_t* live,
-                   uint32_t n, int k, bool by_warp, const nerf::cuda::RenderSlots& samples, cudaStream_t s) {
+void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
+                   bool by_warp, const nerf::cuda::RenderSlots& samples, cudaStream_t s) {
     if (n == 0) return;
     if (by_warp) {
-        warp_march_kernel<<<warp_blocks_for(n), k_block, 0, s>>>(m, list, states, live, n, k, samples);
+        warp_march_kernel<<<warp_blocks_for(n), k_block, 0, s>>>(m, states, live, n, k, samples);
         NPT_CUDA_CHECK_LAUNCH("segment warp_march_kernel");
         return;
     }
-    march_kernel<<<blocks_for(n), k_block, 0, s>>>(m, list, states, live, n, k, samples);
+    march_kernel<<<blocks_for(n), k_block, 0, s>>>(m, states, live, n, k, samples);
     NPT_CUDA_CHECK_LAUNCH("segment march_kernel");
 }
 

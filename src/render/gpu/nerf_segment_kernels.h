@@ -47,10 +47,9 @@ void segment_gather(const uint32_t* queue, const uint32_t* active, uint32_t n, u
 void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, uint32_t n,
                    SegmentState* states, Vec3* dirs, uint32_t* live, uint32_t* live_count, cudaStream_t s);
 // Up to k samples for each of the n live segments. by_warp: a warp per segment (uniform steps only, see
-// warp_march_into_slots), for the rounds of a few long segments; the samples are the same. Where `samples` has a
-// density-only run (RenderSlots::top_count), the shadow segments' samples go there.
-void segment_march(const NerfSegmentModel& m, const uint32_t* list, SegmentState* states, const uint32_t* live,
-                   uint32_t n, int k, bool by_warp, const nerf::cuda::RenderSlots& samples, cudaStream_t s);
+// warp_march_into_slots), for the rounds of a few long segments; the samples are the same.
+void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
+                   bool by_warp, const nerf::cuda::RenderSlots& samples, cudaStream_t s);
 // Composites the round's samples (by_warp: a warp per segment, as the march); finished segments are written into
 // their paths, the others appended to next.
 void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,

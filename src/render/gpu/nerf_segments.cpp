@@ -21,7 +21,8 @@ constexpr int k_min_first_round = 8;
 constexpr uint32_t k_round_samples = 1u << 22;
 // The sample buffers: 8 per path of a wave, between 4 and 16 million (about 120 bytes each).
 constexpr size_t k_min_samples = size_t(1) << 22, k_max_samples = size_t(1) << 24;
-constexpr uint32_t k_list_counts = 6;  // where the lists' lengths start in Buffers::counts
+constexpr uint32_t k_shadow_count = 4;  // where Buffers::counts holds the queued shadow segments (stats)
+constexpr uint32_t k_list_counts = 5;   // where the lists' lengths start in Buffers::counts
 
 int first_round(uint32_t segments, int max_round) {
     int k = k_min_first_round;
@@ -33,14 +34,13 @@ int first_round(uint32_t segments, int max_round) {
 NerfPassTuning NerfPassTuning::defaults() {
     NerfPassTuning t;
     if (const char* e = std::getenv("NERFPT_SEGMENT_WARP_BELOW")) t.warp_below = uint32_t(std::strtoul(e, nullptr, 10));
-    if (const char* e = std::getenv("NERFPT_PASS_SHADOW_COLOUR")) t.shadow_colour = std::string(e) == "1";
     return t;
 }
 
 struct NerfSegmentPass::Buffers {
     size_t paths = 0, segments = 0, samples = 0;
-    // counts: [0] next paths, [1] live a, [2] live b, [3] samples, [4] density-only samples (RenderSlots::top_count),
-    // [5] shadow segments queued (stats), [6 ...] each list's length.
+    // counts: [0] next paths, [1] live a, [2] live b, [3] samples, [4] shadow segments queued (stats), [5 ...] each
+    // list's length.
     DeviceBuffer<uint32_t> lists, counts;
     DeviceBuffer<SegmentState> states;
     DeviceBuffer<Vec3> dirs;
@@ -102,8 +102,7 @@ NerfSegmentPass::NerfSegmentPass(Span<const media::VolumeView> host, Span<const 
     b.paths = std::max<size_t>(max_paths, 1);
     b.segments = 2 * b.paths;  // a volume and a shadow segment per path at most
     // At least one sample per segment, so that every live segment takes part in every round.
-    // Whole MLP tiles (the density-only run is packed down from the top).
-    b.samples = (std::max(b.segments, std::clamp(8 * b.paths, k_min_samples, k_max_samples)) + 127) / 128 * 128;
+    b.samples = std::max((b.segments + 127) / 128 * 128, std::clamp(8 * b.paths, k_min_samples, k_max_samples));
     const size_t lists = m_models.size();
     const char* lower = "--res or --spp";
     b.lists.allocate(std::max<size_t>(lists, 1) * b.segments, "the NeRF segment lists", lower);
@@ -139,14 +138,15 @@ uint32_t NerfSegmentPass::run(WavefrontPath* paths, const uint32_t* queue, const
     Buffers& b = *m_buf;
     const uint32_t lists = uint32_t(m_models.size());
     cuda_check(cudaMemsetAsync(b.counts.data(), 0, b.counts.bytes(), m_stream), "cudaMemsetAsync");
-    SegmentLists l{b.lists.data(), b.counts.data() + k_list_counts, uint32_t(b.segments), lists, b.counts.data() + 5};
+    SegmentLists l{b.lists.data(), b.counts.data() + k_list_counts, uint32_t(b.segments), lists,
+                   b.counts.data() + k_shadow_count};
     segment_gather(queue, active, n, next, b.counts.data(), l, m_stream);
     cuda_check(cudaMemcpyAsync(b.host_counts.data(), b.counts.data(), b.counts.bytes(), cudaMemcpyDeviceToHost,
                                m_stream),
                "cudaMemcpyAsync");
     cuda_check(cudaStreamSynchronize(m_stream), "the NeRF pass");
     const std::vector<uint32_t> counts = b.host_counts;
-    m_shadow_segments += counts[5];
+    m_shadow_segments += counts[k_shadow_count];
     for (uint32_t i = 0; i < lists; ++i)
         if (counts[k_list_counts + i] > 0) evaluate(paths, i, counts[k_list_counts + i]);
     return counts[0];
@@ -172,12 +172,8 @@ void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
     uint32_t live = read(live_count);
     const uint32_t capacity = uint32_t(b.samples);
     const NerfPassTuning& t = m_tuning;
-    nerf::cuda::RenderSlots samples{b.pos.data(),  b.dt.data(),  b.owner.data(),  b.first.data(),
-                                    b.used.data(), sample_count, b.scratch.data()};
-    if (!t.shadow_colour) {  // the shadow segments' samples packed from the top, evaluated for density only
-        samples.top_count = sample_count + 1;
-        samples.top = capacity;
-    }
+    const nerf::cuda::RenderSlots samples{b.pos.data(),  b.dt.data(),  b.owner.data(),  b.first.data(),
+                                          b.used.data(), sample_count, b.scratch.data()};
     // The warp form needs the global lattice of uniform steps.
     const uint32_t warp_below = m.march.cone_angle == 0.0f ? t.warp_below : 0u;
     const int max_round = std::clamp(t.max_round, 1, 255), max_warp_round = std::clamp(t.max_warp_round, 1, 255);
@@ -188,10 +184,11 @@ void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
         m_warp_rounds += by_warp ? 1 : 0;
         k = std::min(k, by_warp ? max_warp_round : max_round);
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / live)));
-        cuda_check(cudaMemsetAsync(sample_count, 0, 2 * sizeof(uint32_t), m_stream), "cudaMemsetAsync");
-        segment_march(m, list, b.states.data(), b.live[cur].data(), live, kk, by_warp, samples, m_stream);
-        // Both kinds of segment in the same rounds (half the rounds, and their synchronisations, of a round per
-        // kind); the shadow segments' samples without colour, unless tuned otherwise.
+        cuda_check(cudaMemsetAsync(sample_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
+        segment_march(m, b.states.data(), b.live[cur].data(), live, kk, by_warp, samples, m_stream);
+        // With colour for every sample: the shadow segments' colour is not needed, but evaluating both kinds in
+        // the same rounds halves the rounds (and their synchronisations); packing the shadow samples apart for a
+        // density-only evaluation was measured at no gain (docs/benchmarks.md, issue 13).
         nerf::cuda::render_field_fp16(m.layout, m.params, m.mlp_half, samples, b.dirs.data(),
                                       nerf::cuda::field_rows(uint64_t(live) * uint64_t(kk), capacity),
                                       b.encoded.data(), b.sigma.data(), b.rgb.data(), m_stream);

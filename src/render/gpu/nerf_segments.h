@@ -42,9 +42,6 @@ struct NerfPassTuning {
     // Samples per segment and round at most; rounds double up to it (RenderSlots::used holds 255).
     int max_round = 128;
     int max_warp_round = 255;
-    // Evaluate colour for the shadow segments' samples too (nobody reads it) instead of packing them apart for a
-    // density-only evaluation. NERFPT_PASS_SHADOW_COLOUR=1 sets it (a benchmark knob, to measure the difference).
-    bool shadow_colour = false;
     static NerfPassTuning defaults();
 };
 
