@@ -5,9 +5,11 @@
 #if defined(__CUDACC__)
 #define NPT_HD __host__ __device__
 #define NPT_INLINE __forceinline__
+#define NPT_UNROLL _Pragma("unroll")  // a loop over a local array: unrolled, the array stays in registers
 #else
 #define NPT_HD
 #define NPT_INLINE inline __attribute__((always_inline))
+#define NPT_UNROLL
 #endif
 
 #include <cstddef>

@@ -1,7 +1,9 @@
-// The wavefront path tracer's NeRF pass (render/gpu/nerf_segments.h) against the CPU's integrate_volumes on the
-// same segments: a segment is left as a query by volume_segment (wavefront.h), marched and evaluated in batches
-// on the GPU (fp16 tensor-core MLP) and written back into its path; the CPU marches the same segment with the
-// same lattice offset through the fp32 MLPs. Registered only where a GPU exists (label gpu).
+// The wavefront path tracer's NeRF pass (render/gpu/nerf_segments.h) against the CPU's integrate_volumes on
+// the same segments: a segment is left as a query by volume_segment (wavefront.h), marched and evaluated in
+// batches on the GPU (fp16 tensor-core MLP) and written back into its path; the CPU marches the same segment
+// with the same lattice offset through the fp32 MLPs. Registered only where a GPU exists (label gpu).
+#include "render/gpu/nerf_segments.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,7 +14,6 @@
 #include "media/volume_integrator.h"
 #include "random_nerf_volume.h"
 #include "render/gpu/device_scene.h"
-#include "render/gpu/nerf_segments.h"
 #include "render/gpu/shared_math_check.h"
 
 namespace npt {
@@ -45,6 +46,7 @@ void expect_pass_matches_cpu(const gpu::NerfPassTuning& tuning, const char* what
     const uint32_t slot_of_volume[1] = {0};
 
     std::vector<gpu::WavefrontPath> paths(size_t(n + done));  // phase Done, nothing queued
+    std::vector<gpu::NerfQuery> queries(2 * paths.size());    // PathStore::queries: [2i + kind]
     std::vector<media::VolumeResult> cpu(n);
     std::vector<int> kind(n);
     int queued = 0;
@@ -57,8 +59,9 @@ void expect_pass_matches_cpu(const gpu::NerfPassTuning& tuning, const char* what
         gpu::WavefrontPath& p = paths[i];
         p.phase = gpu::PathPhase::Scatter;
         media::VolumeResult inline_result;
-        const bool q = gpu::volume_segment({host.data(), host.size()}, slot_of_volume, ray, 0.0f, t_end, xi,
-                                           kind[i] == 1, &p.query[kind[i]], &inline_result);
+        const bool q =
+            gpu::volume_segment({host.data(), host.size()}, slot_of_volume, ray, 0.0f, t_end, xi,
+                                kind[i] == 1, &queries[2 * size_t(i) + size_t(kind[i])], &inline_result);
         queued += q ? 1 : 0;
         // A segment that misses the cube is not queued and is empty.
         if (!q) {
@@ -70,36 +73,48 @@ void expect_pass_matches_cpu(const gpu::NerfPassTuning& tuning, const char* what
 
     std::vector<uint32_t> queue(paths.size());  // what a launch writes beside the paths
     for (size_t i = 0; i < paths.size(); ++i)
-        queue[i] = gpu::queue_word(paths[i].phase != gpu::PathPhase::Done, paths[i].query[0].slot,
-                                   paths[i].query[1].slot);
-    gpu::DeviceBuffer<gpu::WavefrontPath> dev_paths;
-    dev_paths.upload(paths);
+        queue[i] = gpu::queue_word(paths[i].phase != gpu::PathPhase::Done, queries[2 * i].slot,
+                                   queries[2 * i + 1].slot);
+    // The paths as the launches keep them: planes of words (PathStore), built here with the same functions.
+    const uint32_t stride = uint32_t(paths.size());
+    std::vector<uint4> words(size_t(gpu::k_path_words) * stride);
+    for (uint32_t i = 0; i < stride; ++i)
+        gpu::store_path({words.data(), stride, queries.data()}, i, paths[i]);
+    gpu::DeviceBuffer<uint4> dev_words;
+    dev_words.upload(words);
+    gpu::DeviceBuffer<gpu::NerfQuery> dev_queries;
+    dev_queries.upload(queries);
+    const gpu::PathStore dev_paths{dev_words.data(), stride, dev_queries.data()};
     gpu::DeviceBuffer<uint32_t> dev_queue;
     dev_queue.upload(queue);
     gpu::DeviceBuffer<uint32_t> next;
     next.allocate(paths.size());
-    const uint32_t going_on = pass.run(dev_paths.data(), dev_queue.data(), nullptr, uint32_t(paths.size()), next.data());
+    const uint32_t going_on =
+        pass.run(dev_paths, dev_queue.data(), nullptr, uint32_t(paths.size()), next.data());
     // The first n paths are in phase Scatter and go on; the done ones do not.
     ASSERT_EQ(going_on, uint32_t(n));
     std::vector<uint32_t> listed = next.download();
     listed.resize(size_t(n));
     std::sort(listed.begin(), listed.end());
     for (int i = 0; i < n; ++i) ASSERT_EQ(listed[size_t(i)], uint32_t(i));
-    const std::vector<gpu::WavefrontPath> out = dev_paths.download();
+    words = dev_words.download();
+    std::vector<gpu::WavefrontPath> out(paths.size());
+    for (uint32_t i = 0; i < stride; ++i) out[i] = gpu::load_path({words.data(), stride, queries.data()}, i);
     cudaStreamDestroy(stream);
 
-    // The only difference is fp16 rounding in the MLPs (2^-11 relative per operand). This network's outputs are small
-    // (random initial weights), so its errors are absolute and tiny: the first GPU run saw at most 5e-5. Required:
-    // transmittance within 2e-4 and radiance within 2e-4 + 0.1%, tighter than one march step's share here
-    // (sigma ~0.3 per model unit over sqrt(3)/1024: ~5e-4 in T), so a sample gained or lost, a wrong lattice offset
-    // or a shifted segment start fails. Up to 0.5% of the segments may differ more (a cell decision flipped by
-    // rounding of a position, as the per-thread test in shared_math_gpu_test sees; in the warp form also a lattice
-    // point within rounding of a skip's target, which march_continue computes from another point of the same
-    // empty cell: 4 of 3889 segments on the H200, one sample each), none by more than 0.1.
+    // The only difference is fp16 rounding in the MLPs (2^-11 relative per operand). This network's outputs
+    // are small (random initial weights), so its errors are absolute and tiny: the first GPU run saw at most
+    // 5e-5. Required: transmittance within 2e-4 and radiance within 2e-4 + 0.1%, tighter than one march
+    // step's share here (sigma ~0.3 per model unit over sqrt(3)/1024: ~5e-4 in T), so a sample gained or
+    // lost, a wrong lattice offset or a shifted segment start fails. Up to 0.5% of the segments may differ
+    // more (a cell decision flipped by rounding of a position, as the per-thread test in shared_math_gpu_test
+    // sees; in the warp form also a lattice point within rounding of a skip's target, which march_continue
+    // computes from another point of the same empty cell: 4 of 3889 segments on the H200, one sample each),
+    // none by more than 0.1.
     int crossing = 0, outliers = 0, gross = 0;
     double worst = 0.0;
     for (int i = 0; i < n; ++i) {
-        if (paths[i].query[kind[i]].slot == gpu::k_no_query) continue;
+        if (queries[2 * size_t(i) + size_t(kind[i])].slot == gpu::k_no_query) continue;
         const float t_gpu = kind[i] == 0 ? out[i].vol.transmittance : out[i].shadow_t;
         const Rgb l_gpu = kind[i] == 0 ? out[i].vol.radiance : Rgb(0.0f);
         const media::VolumeResult& r = cpu[i];
@@ -113,12 +128,13 @@ void expect_pass_matches_cpu(const gpu::NerfPassTuning& tuning, const char* what
         }
         worst = std::max(worst, double(err));
         if (!ok && ++outliers <= 5)
-            std::printf("segment %d (kind %d): cpu T %.5f L %.5f | gpu T %.5f L %.5f\n", i, kind[i], r.transmittance,
-                        r.radiance.x, t_gpu, l_gpu.x);
+            std::printf("segment %d (kind %d): cpu T %.5f L %.5f | gpu T %.5f L %.5f\n", i, kind[i],
+                        r.transmittance, r.radiance.x, t_gpu, l_gpu.x);
         if (err > 0.1f) ++gross;
     }
-    std::printf("%s: %d queued segments, %d crossing the medium, %d outside the bounds, worst difference %.2e (%s)\n",
-                what, queued, crossing, outliers, worst, pass.stats().c_str());
+    std::printf(
+        "%s: %d queued segments, %d crossing the medium, %d outside the bounds, worst difference %.2e (%s)\n",
+        what, queued, crossing, outliers, worst, pass.stats().c_str());
     EXPECT_GT(crossing, queued / 4);  // the segments do see the medium
     EXPECT_LE(outliers, queued / 200);
     EXPECT_EQ(gross, 0);

@@ -1,8 +1,7 @@
-#include "render/gpu/nerf_segment_kernels.h"
-
 #include "core/cuda/device_buffer.h"
 #include "core/cuda/warp_lists.cuh"
 #include "nerf/cuda/march_slots.cuh"
+#include "render/gpu/nerf_segment_kernels.h"
 
 namespace npt::gpu {
 
@@ -14,13 +13,12 @@ unsigned blocks_for(uint32_t n) { return (n + k_block - 1) / k_block; }
 unsigned warp_blocks_for(uint32_t warps) { return (warps + k_block / 32 - 1) / (k_block / 32); }
 
 // The segment's result, where the path reads it.
-__device__ __forceinline__ void write_result(WavefrontPath& p, int kind, Rgb radiance, float transmittance) {
-    if (kind == 0) {
-        p.vol.radiance = radiance;
-        p.vol.transmittance = transmittance;
-    } else {
-        p.shadow_t = transmittance;
-    }
+__device__ __forceinline__ void write_result(const PathStore& paths, uint32_t item, Rgb radiance,
+                                             float transmittance) {
+    if (segment_kind(item) == 0)
+        store_volume_result(paths, segment_path(item), radiance, transmittance);
+    else
+        store_shadow_transmittance(paths, segment_path(item), transmittance);
 }
 
 // A segment's compositing where its last round left it.
@@ -32,12 +30,13 @@ __device__ __forceinline__ media::Accumulator resume(const SegmentState& s, uint
     return acc;
 }
 
-// After a round: a segment that turned opaque or reached its end is written into its path; true for one that goes
-// on (its compositing kept for the next round).
-__device__ __forceinline__ bool finish_or_keep(const NerfSegmentModel& m, WavefrontPath* paths, uint32_t item,
-                                               SegmentState& s, const media::Accumulator& acc) {
+// After a round: a segment that turned opaque or reached its end is written into its path; true for one that
+// goes on (its compositing kept for the next round).
+__device__ __forceinline__ bool finish_or_keep(const NerfSegmentModel& m, const PathStore& paths,
+                                               uint32_t item, SegmentState& s,
+                                               const media::Accumulator& acc) {
     if (acc.done() || s.cursor.done(m.march)) {
-        write_result(paths[segment_path(item)], segment_kind(item), acc.radiance, acc.done() ? 0.0f : expf(acc.log_t));
+        write_result(paths, item, acc.radiance, acc.done() ? 0.0f : expf(acc.log_t));
         return false;
     }
     s.radiance = acc.radiance;
@@ -45,8 +44,9 @@ __device__ __forceinline__ bool finish_or_keep(const NerfSegmentModel& m, Wavefr
     return true;
 }
 
-__global__ void __launch_bounds__(k_block) gather_kernel(const uint32_t* queue, const uint32_t* active, uint32_t n,
-                                                          uint32_t* next, uint32_t* next_count, SegmentLists lists) {
+__global__ void __launch_bounds__(k_block)
+    gather_kernel(const uint32_t* queue, const uint32_t* active, uint32_t n, uint32_t* next,
+                  uint32_t* next_count, SegmentLists lists) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     const bool in = i < n;
     const uint32_t id = in ? (active ? active[i] : i) : 0u;
@@ -64,19 +64,17 @@ __global__ void __launch_bounds__(k_block) gather_kernel(const uint32_t* queue, 
     // The same trip counts in every lane: warp_append needs them all.
     for (uint32_t l = 0; l < lists.lists; ++l)
         for (uint32_t kind = 0; kind < 2; ++kind)
-            warp_append(slot[kind] == l, segment_item(id, int(kind)), lists.items + size_t(l) * lists.capacity,
-                        lists.counts + l);
+            warp_append(slot[kind] == l, segment_item(id, int(kind)),
+                        lists.items + size_t(l) * lists.capacity, lists.counts + l);
 }
 
-__global__ void __launch_bounds__(k_block) start_kernel(NerfSegmentModel m, WavefrontPath* paths,
-                                                         const uint32_t* list, uint32_t n, SegmentState* states,
-                                                         Vec3* dirs, uint32_t* live, uint32_t* live_count) {
+__global__ void __launch_bounds__(k_block)
+    start_kernel(NerfSegmentModel m, PathStore paths, const uint32_t* list, uint32_t n, SegmentState* states,
+                 Vec3* dirs, uint32_t* live, uint32_t* live_count) {
     const uint32_t j = blockIdx.x * blockDim.x + threadIdx.x;
     bool marching = false;
     if (j < n) {
-        const int kind = segment_kind(list[j]);
-        WavefrontPath& p = paths[segment_path(list[j])];
-        const NerfQuery q = p.query[kind];
+        const NerfQuery q = paths.queries[2 * size_t(segment_path(list[j])) + size_t(segment_kind(list[j]))];
         nerf::MarchParams mp = m.march;
         mp.t_max = q.t_max;
         SegmentState s;
@@ -87,14 +85,14 @@ __global__ void __launch_bounds__(k_block) start_kernel(NerfSegmentModel m, Wave
                    nerf::march_clip(mp, q.ray, m.box_min, m.box_max, &s.cursor) && !s.cursor.done(mp);
         states[j] = s;
         dirs[j] = q.ray.d;
-        if (!marching) write_result(p, kind, Rgb(0.0f), 1.0f);
+        if (!marching) write_result(paths, list[j], Rgb(0.0f), 1.0f);
     }
     warp_append(marching, j, live, live_count);
 }
 
-__global__ void __launch_bounds__(k_block) march_kernel(NerfSegmentModel m, SegmentState* states,
-                                                         const uint32_t* live, uint32_t n, int k,
-                                                         nerf::cuda::RenderSlots samples) {
+__global__ void __launch_bounds__(k_block)
+    march_kernel(NerfSegmentModel m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
+                 nerf::cuda::RenderSlots samples) {
     const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
     const bool in = a < n;
     const uint32_t j = in ? live[a] : 0u;
@@ -108,11 +106,10 @@ __global__ void __launch_bounds__(k_block) march_kernel(NerfSegmentModel m, Segm
     if (in) states[j].cursor = c;
 }
 
-__global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, WavefrontPath* paths,
-                                                             const uint32_t* list, SegmentState* states,
-                                                             const uint32_t* live, uint32_t n,
-                                                             nerf::cuda::RenderSlots samples, const float* sigma,
-                                                             const Rgb* rgb, uint32_t* next, uint32_t* next_count) {
+__global__ void __launch_bounds__(k_block)
+    composite_kernel(NerfSegmentModel m, PathStore paths, const uint32_t* list, SegmentState* states,
+                     const uint32_t* live, uint32_t n, nerf::cuda::RenderSlots samples, const float* sigma,
+                     const Rgb* rgb, uint32_t* next, uint32_t* next_count) {
     const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
     bool go_on = false;
     uint32_t j = 0;
@@ -132,9 +129,9 @@ __global__ void __launch_bounds__(k_block) composite_kernel(NerfSegmentModel m, 
 
 // The warp forms of march and composite (one live segment per warp), for the rounds whose few long segments a
 // thread each would march and composite as long dependent chains.
-__global__ void __launch_bounds__(k_block) warp_march_kernel(NerfSegmentModel m, SegmentState* states,
-                                                              const uint32_t* live, uint32_t n, int k,
-                                                              nerf::cuda::RenderSlots samples) {
+__global__ void __launch_bounds__(k_block)
+    warp_march_kernel(NerfSegmentModel m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
+                      nerf::cuda::RenderSlots samples) {
     const uint32_t a = (blockIdx.x * blockDim.x + threadIdx.x) / 32;
     if (a >= n) return;  // a whole warp
     const uint32_t j = live[a];
@@ -144,9 +141,9 @@ __global__ void __launch_bounds__(k_block) warp_march_kernel(NerfSegmentModel m,
     if ((threadIdx.x & 31) == 0) states[j].cursor = c;
 }
 
-// add_nerf_sample over the round's samples 32 at a time: a sample is added while the transmittance before it is
-// above the threshold (acc.done() false), that transmittance being the state's minus a prefix sum of the optical
-// depths before it. The same sums as the sequential loop, added in another order.
+// add_nerf_sample over the round's samples 32 at a time: a sample is added while the transmittance before it
+// is above the threshold (acc.done() false), that transmittance being the state's minus a prefix sum of the
+// optical depths before it. The same sums as the sequential loop, added in another order.
 __device__ __forceinline__ void warp_composite(media::Accumulator& acc, const float* sigma, const Rgb* rgb,
                                                const float* dt, uint32_t base, int used, float density_scale,
                                                float emission_scale) {
@@ -158,7 +155,7 @@ __device__ __forceinline__ void warp_composite(media::Accumulator& acc, const fl
         Rgb c(0.0f);
         if (q < used) {
             tau = sigma[base + q] * density_scale * dt[base + q];  // Accumulator::add's (sigma scale) len
-            if (!(tau > 0.0f)) tau = 0.0f;                        // add() leaves such a sample out
+            if (!(tau > 0.0f)) tau = 0.0f;                         // add() leaves such a sample out
             if (acc.with_emission) {
                 const Rgb s = rgb[base + q];
                 c = Rgb(srgb_to_linear(s.x), srgb_to_linear(s.y), srgb_to_linear(s.z)) * emission_scale;
@@ -186,11 +183,10 @@ __device__ __forceinline__ void warp_composite(media::Accumulator& acc, const fl
     }
 }
 
-__global__ void __launch_bounds__(k_block) warp_composite_kernel(NerfSegmentModel m, WavefrontPath* paths,
-                                                                  const uint32_t* list, SegmentState* states,
-                                                                  const uint32_t* live, uint32_t n,
-                                                                  nerf::cuda::RenderSlots samples, const float* sigma,
-                                                                  const Rgb* rgb, uint32_t* next, uint32_t* next_count) {
+__global__ void __launch_bounds__(k_block)
+    warp_composite_kernel(NerfSegmentModel m, PathStore paths, const uint32_t* list, SegmentState* states,
+                          const uint32_t* live, uint32_t n, nerf::cuda::RenderSlots samples,
+                          const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count) {
     const uint32_t a = (blockIdx.x * blockDim.x + threadIdx.x) / 32;
     if (a >= n) return;  // a whole warp
     const bool leader = (threadIdx.x & 31) == 0;
@@ -203,14 +199,14 @@ __global__ void __launch_bounds__(k_block) warp_composite_kernel(NerfSegmentMode
 
 }  // namespace
 
-void segment_gather(const uint32_t* queue, const uint32_t* active, uint32_t n, uint32_t* next, uint32_t* next_count,
-                    const SegmentLists& lists, cudaStream_t s) {
+void segment_gather(const uint32_t* queue, const uint32_t* active, uint32_t n, uint32_t* next,
+                    uint32_t* next_count, const SegmentLists& lists, cudaStream_t s) {
     if (n == 0) return;
     gather_kernel<<<blocks_for(n), k_block, 0, s>>>(queue, active, n, next, next_count, lists);
     NPT_CUDA_CHECK_LAUNCH("segment gather_kernel");
 }
 
-void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, uint32_t n,
+void segment_start(const NerfSegmentModel& m, const PathStore& paths, const uint32_t* list, uint32_t n,
                    SegmentState* states, Vec3* dirs, uint32_t* live, uint32_t* live_count, cudaStream_t s) {
     if (n == 0) return;
     start_kernel<<<blocks_for(n), k_block, 0, s>>>(m, paths, list, n, states, dirs, live, live_count);
@@ -229,13 +225,14 @@ void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32
     NPT_CUDA_CHECK_LAUNCH("segment march_kernel");
 }
 
-void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,
-                       const uint32_t* live, uint32_t n, bool by_warp, const nerf::cuda::RenderSlots& samples,
-                       const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s) {
+void segment_composite(const NerfSegmentModel& m, const PathStore& paths, const uint32_t* list,
+                       SegmentState* states, const uint32_t* live, uint32_t n, bool by_warp,
+                       const nerf::cuda::RenderSlots& samples, const float* sigma, const Rgb* rgb,
+                       uint32_t* next, uint32_t* next_count, cudaStream_t s) {
     if (n == 0) return;
     if (by_warp) {
-        warp_composite_kernel<<<warp_blocks_for(n), k_block, 0, s>>>(m, paths, list, states, live, n, samples, sigma,
-                                                                      rgb, next, next_count);
+        warp_composite_kernel<<<warp_blocks_for(n), k_block, 0, s>>>(m, paths, list, states, live, n, samples,
+                                                                     sigma, rgb, next, next_count);
         NPT_CUDA_CHECK_LAUNCH("segment warp_composite_kernel");
         return;
     }

@@ -21,7 +21,6 @@ struct SegmentState {
     Rgb radiance{0.0f};
 };
 
-
 // A segment in a list: its path's index and which of the path's queries it is (kind 0: the volume ray, with
 // emission; 1: the shadow ray, attenuation only) in the top bit.
 NPT_HD NPT_INLINE uint32_t segment_item(uint32_t path, int kind) { return path | (uint32_t(kind) << 31); }
@@ -40,20 +39,21 @@ struct SegmentLists {
 
 // The paths of `active` (null: 0 .. n-1) that are not done go to `next`; their queued segments to the lists.
 // From each path's queue_word (wavefront.h).
-void segment_gather(const uint32_t* queue, const uint32_t* active, uint32_t n, uint32_t* next, uint32_t* next_count,
-                    const SegmentLists& lists, cudaStream_t s);
-// Starts the march of each of the n segments of `list`; a segment with nothing to march is written back at once
-// (no emission, T = 1), the others go to `live`.
-void segment_start(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, uint32_t n,
+void segment_gather(const uint32_t* queue, const uint32_t* active, uint32_t n, uint32_t* next,
+                    uint32_t* next_count, const SegmentLists& lists, cudaStream_t s);
+// Starts the march of each of the n segments of `list`; a segment with nothing to march is written back at
+// once (no emission, T = 1), the others go to `live`.
+void segment_start(const NerfSegmentModel& m, const PathStore& paths, const uint32_t* list, uint32_t n,
                    SegmentState* states, Vec3* dirs, uint32_t* live, uint32_t* live_count, cudaStream_t s);
 // Up to k samples for each of the n live segments. by_warp: a warp per segment (uniform steps only, see
 // warp_march_into_slots), for the rounds of a few long segments; the samples are the same.
 void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
                    bool by_warp, const nerf::cuda::RenderSlots& samples, cudaStream_t s);
-// Composites the round's samples (by_warp: a warp per segment, as the march); finished segments are written into
-// their paths, the others appended to next.
-void segment_composite(const NerfSegmentModel& m, WavefrontPath* paths, const uint32_t* list, SegmentState* states,
-                       const uint32_t* live, uint32_t n, bool by_warp, const nerf::cuda::RenderSlots& samples,
-                       const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s);
+// Composites the round's samples (by_warp: a warp per segment, as the march); finished segments are written
+// into their paths, the others appended to next.
+void segment_composite(const NerfSegmentModel& m, const PathStore& paths, const uint32_t* list,
+                       SegmentState* states, const uint32_t* live, uint32_t n, bool by_warp,
+                       const nerf::cuda::RenderSlots& samples, const float* sigma, const Rgb* rgb,
+                       uint32_t* next, uint32_t* next_count, cudaStream_t s);
 
 }  // namespace npt::gpu

@@ -33,14 +33,15 @@ int first_round(uint32_t segments, int max_round) {
 
 NerfPassTuning NerfPassTuning::defaults() {
     NerfPassTuning t;
-    if (const char* e = std::getenv("NERFPT_SEGMENT_WARP_BELOW")) t.warp_below = uint32_t(std::strtoul(e, nullptr, 10));
+    if (const char* e = std::getenv("NERFPT_SEGMENT_WARP_BELOW"))
+        t.warp_below = uint32_t(std::strtoul(e, nullptr, 10));
     return t;
 }
 
 struct NerfSegmentPass::Buffers {
     size_t paths = 0, segments = 0, samples = 0;
-    // counts: [0] next paths, [1] live a, [2] live b, [3] samples, [4] shadow segments queued (stats), [5 ...] each
-    // list's length.
+    // counts: [0] next paths, [1] live a, [2] live b, [3] samples, [4] shadow segments queued (stats), [5
+    // ...] each list's length.
     DeviceBuffer<uint32_t> lists, counts;
     DeviceBuffer<SegmentState> states;
     DeviceBuffer<Vec3> dirs;
@@ -61,7 +62,8 @@ NerfSegmentPass::NerfSegmentPass(Span<const media::VolumeView> host, Span<const 
     // The device views hold the device pointers of the models' parameters (DeviceVolumes).
     std::vector<media::VolumeView> dev(device.size);
     if (device.size)
-        cuda_check(cudaMemcpy(dev.data(), device.data, device.size * sizeof(media::VolumeView), cudaMemcpyDeviceToHost),
+        cuda_check(cudaMemcpy(dev.data(), device.data, device.size * sizeof(media::VolumeView),
+                              cudaMemcpyDeviceToHost),
                    "cudaMemcpy");
     std::vector<uint32_t> slot_of(host.size, k_no_query);
     m_bits.reserve(2 * host.size);
@@ -76,14 +78,17 @@ NerfSegmentPass::NerfSegmentPass(Span<const media::VolumeView> host, Span<const 
         m.layout = v.nerf.field.layout;
         m.params = dev[i].nerf.field.params;
         m_mlp_half.emplace_back(nerf::cuda::k_mlp_half_weights, "the NeRF's fp16 weights", "");
-        cuda_check(cudaMemsetAsync(m_mlp_half.back().data(), 0, m_mlp_half.back().bytes(), stream), "cudaMemsetAsync");
-        nerf::cuda::to_half(m.params, uint32_t(nerf::cuda::k_mlp_param_count), m_mlp_half.back().data(), stream);
+        cuda_check(cudaMemsetAsync(m_mlp_half.back().data(), 0, m_mlp_half.back().bytes(), stream),
+                   "cudaMemsetAsync");
+        nerf::cuda::to_half(m.params, uint32_t(nerf::cuda::k_mlp_param_count), m_mlp_half.back().data(),
+                            stream);
         m.mlp_half = m_mlp_half.back().data();
         m.march = v.nerf.march;
         const nerf::cuda::OccupancyBits bits = nerf::cuda::occupancy_bits(v.nerf.occupancy);
         m_bits.emplace_back();
         m_bits.back().upload(bits.occupied, "the occupancy grid", "");
-        m.grid = {nullptr, v.nerf.occupancy.cascades, v.nerf.occupancy.resolution, m_bits.back().data(), nullptr};
+        m.grid = {nullptr, v.nerf.occupancy.cascades, v.nerf.occupancy.resolution, m_bits.back().data(),
+                  nullptr};
         if (!bits.coarse.empty()) {
             m_bits.emplace_back();
             m_bits.back().upload(bits.coarse, "the occupancy grid", "");
@@ -102,7 +107,8 @@ NerfSegmentPass::NerfSegmentPass(Span<const media::VolumeView> host, Span<const 
     b.paths = std::max<size_t>(max_paths, 1);
     b.segments = 2 * b.paths;  // a volume and a shadow segment per path at most
     // At least one sample per segment, so that every live segment takes part in every round.
-    b.samples = std::max((b.segments + 127) / 128 * 128, std::clamp(8 * b.paths, k_min_samples, k_max_samples));
+    b.samples =
+        std::max((b.segments + 127) / 128 * 128, std::clamp(8 * b.paths, k_min_samples, k_max_samples));
     const size_t lists = m_models.size();
     const char* lower = "--res or --spp";
     b.lists.allocate(std::max<size_t>(lists, 1) * b.segments, "the NeRF segment lists", lower);
@@ -128,21 +134,22 @@ NerfSegmentPass::~NerfSegmentPass() = default;
 
 uint32_t NerfSegmentPass::read(const uint32_t* device_count) {
     uint32_t v = 0;
-    cuda_check(cudaMemcpyAsync(&v, device_count, sizeof v, cudaMemcpyDeviceToHost, m_stream), "cudaMemcpyAsync");
+    cuda_check(cudaMemcpyAsync(&v, device_count, sizeof v, cudaMemcpyDeviceToHost, m_stream),
+               "cudaMemcpyAsync");
     cuda_check(cudaStreamSynchronize(m_stream), "the NeRF pass");
     return v;
 }
 
-uint32_t NerfSegmentPass::run(WavefrontPath* paths, const uint32_t* queue, const uint32_t* active, uint32_t n,
-                              uint32_t* next) {
+uint32_t NerfSegmentPass::run(const PathStore& paths, const uint32_t* queue, const uint32_t* active,
+                              uint32_t n, uint32_t* next) {
     Buffers& b = *m_buf;
     const uint32_t lists = uint32_t(m_models.size());
     cuda_check(cudaMemsetAsync(b.counts.data(), 0, b.counts.bytes(), m_stream), "cudaMemsetAsync");
     SegmentLists l{b.lists.data(), b.counts.data() + k_list_counts, uint32_t(b.segments), lists,
                    b.counts.data() + k_shadow_count};
     segment_gather(queue, active, n, next, b.counts.data(), l, m_stream);
-    cuda_check(cudaMemcpyAsync(b.host_counts.data(), b.counts.data(), b.counts.bytes(), cudaMemcpyDeviceToHost,
-                               m_stream),
+    cuda_check(cudaMemcpyAsync(b.host_counts.data(), b.counts.data(), b.counts.bytes(),
+                               cudaMemcpyDeviceToHost, m_stream),
                "cudaMemcpyAsync");
     cuda_check(cudaStreamSynchronize(m_stream), "the NeRF pass");
     const std::vector<uint32_t> counts = b.host_counts;
@@ -160,7 +167,7 @@ std::string NerfSegmentPass::stats() {
     return s;
 }
 
-void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
+void NerfSegmentPass::evaluate(const PathStore& paths, size_t model, uint32_t n) {
     Buffers& b = *m_buf;
     m_segments += n;
     const NerfSegmentModel& m = m_models[model];
@@ -176,7 +183,8 @@ void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
                                           b.used.data(), sample_count, b.scratch.data()};
     // The warp form needs the global lattice of uniform steps.
     const uint32_t warp_below = m.march.cone_angle == 0.0f ? t.warp_below : 0u;
-    const int max_round = std::clamp(t.max_round, 1, 255), max_warp_round = std::clamp(t.max_warp_round, 1, 255);
+    const int max_round = std::clamp(t.max_round, 1, 255),
+              max_warp_round = std::clamp(t.max_warp_round, 1, 255);
     int cur = 0;
     for (int k = first_round(live, max_round); live > 0; k *= 2) {
         ++m_rounds;
@@ -186,17 +194,17 @@ void NerfSegmentPass::evaluate(WavefrontPath* paths, size_t model, uint32_t n) {
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / live)));
         cuda_check(cudaMemsetAsync(sample_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
         segment_march(m, b.states.data(), b.live[cur].data(), live, kk, by_warp, samples, m_stream);
-        // With colour for every sample: the shadow segments' colour is not needed, but evaluating both kinds in
-        // the same rounds halves the rounds (and their synchronisations); packing the shadow samples apart for a
-        // density-only evaluation was measured at no gain (docs/benchmarks.md, issue 13).
+        // With colour for every sample: the shadow segments' colour is not needed, but evaluating both kinds
+        // in the same rounds halves the rounds (and their synchronisations); packing the shadow samples apart
+        // for a density-only evaluation was measured at no gain (docs/benchmarks.md, issue 13).
         nerf::cuda::render_field_fp16(m.layout, m.params, m.mlp_half, samples, b.dirs.data(),
                                       nerf::cuda::field_rows(uint64_t(live) * uint64_t(kk), capacity),
                                       b.encoded.data(), b.sigma.data(), b.rgb.data(), m_stream);
         const int nxt = 1 - cur;
         uint32_t* next_count = b.counts.data() + 1 + nxt;
         cuda_check(cudaMemsetAsync(next_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
-        segment_composite(m, paths, list, b.states.data(), b.live[cur].data(), live, by_warp, samples, b.sigma.data(),
-                          b.rgb.data(), b.live[nxt].data(), next_count, m_stream);
+        segment_composite(m, paths, list, b.states.data(), b.live[cur].data(), live, by_warp, samples,
+                          b.sigma.data(), b.rgb.data(), b.live[nxt].data(), next_count, m_stream);
         live = read(next_count);
         cur = nxt;
     }

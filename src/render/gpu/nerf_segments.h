@@ -1,9 +1,9 @@
 // The NeRF pass of the wavefront path tracer (wavefront.h): after each OptiX launch it gathers the paths that
-// go on and the NeRF segments they left queued, marches every segment through its model's occupancy grid a few
-// samples per round (the rounds of `nerfpt view`'s GPU renderer), evaluates the samples with the hash-grid
-// kernel and the fused tensor-core MLP (fp16) and composites them exactly as
-// media::march_nerf does (the same samples, lattice offset, scales and stopping point), writing each result back
-// into its path. Host code; the kernels are in nerf_segment_kernels.cu.
+// go on and the NeRF segments they left queued, marches every segment through its model's occupancy grid a
+// few samples per round (the rounds of `nerfpt view`'s GPU renderer), evaluates the samples with the
+// hash-grid kernel and the fused tensor-core MLP (fp16) and composites them exactly as media::march_nerf does
+// (the same samples, lattice offset, scales and stopping point), writing each result back into its path. Host
+// code; the kernels are in nerf_segment_kernels.cu.
 #pragma once
 
 #include <cuda_fp16.h>
@@ -26,13 +26,13 @@ struct NerfSegmentModel {
     const float* params = nullptr;     // device, fp32 (the scene's copy)
     const __half* mlp_half = nullptr;  // device, the fused MLP's weights
     nerf::MarchParams march;
-    nerf::OccupancyGridView grid;      // bit fields on the device
-    Vec3 box_min, box_max;             // around the occupied cells
+    nerf::OccupancyGridView grid;  // bit fields on the device
+    Vec3 box_min, box_max;         // around the occupied cells
     float density_scale = 1.0f, emission_scale = 1.0f;
 };
 
-// How the pass splits its rounds. The defaults were measured on the H200 (docs/benchmarks.md, issue 13); tests
-// force either form.
+// How the pass splits its rounds. The defaults were measured on the H200 (docs/benchmarks.md, issue 13);
+// tests force either form.
 struct NerfPassTuning {
     // A round of at most this many live segments marches and composites each with a whole warp (uniform steps
     // only): the long segments of a round's tail are then not one thread's long dependent chain. 0: never.
@@ -49,8 +49,8 @@ class NerfSegmentPass {
   public:
     // host: the scene's volumes with host pointers (SceneData); device: the same on the device (DeviceScene).
     // Every NeRF whose network the fp16 kernels support gets a slot; `max_paths` bounds the paths of a wave.
-    NerfSegmentPass(Span<const media::VolumeView> host, Span<const media::VolumeView> device, size_t max_paths,
-                    cudaStream_t stream);
+    NerfSegmentPass(Span<const media::VolumeView> host, Span<const media::VolumeView> device,
+                    size_t max_paths, cudaStream_t stream);
     ~NerfSegmentPass();
     NerfSegmentPass(const NerfSegmentPass&) = delete;
     NerfSegmentPass& operator=(const NerfSegmentPass&) = delete;
@@ -60,9 +60,10 @@ class NerfSegmentPass {
     // Per scene volume: its slot, or k_no_query (device array, WavefrontParams::nerf_slot).
     const uint32_t* nerf_slots() const { return m_slot_of_volume.data(); }
 
-    // The n paths of `active` (null: paths 0 .. n-1) after a launch, `queue` their queue_words: those that go on
-    // are listed in `next` (returned: how many), and every queued segment is evaluated into its path.
-    uint32_t run(WavefrontPath* paths, const uint32_t* queue, const uint32_t* active, uint32_t n, uint32_t* next);
+    // The n paths of `active` (null: paths 0 .. n-1) after a launch, `queue` their queue_words: those that go
+    // on are listed in `next` (returned: how many), and every queued segment is evaluated into its path.
+    uint32_t run(const PathStore& paths, const uint32_t* queue, const uint32_t* active, uint32_t n,
+                 uint32_t* next);
 
     // Since the last call: segments evaluated and rounds; then the counts restart.
     std::string stats();
@@ -71,7 +72,7 @@ class NerfSegmentPass {
 
   private:
     struct Buffers;
-    void evaluate(WavefrontPath* paths, size_t model, uint32_t n);
+    void evaluate(const PathStore& paths, size_t model, uint32_t n);
     uint32_t read(const uint32_t* device_count);
 
     cudaStream_t m_stream;

@@ -1,4 +1,4 @@
-// The path tracer's OptiX pipeline: the module (the embedded OptiX-IR of device/optix_programs.cu), one program
+// The path tracer's OptiX pipeline: the modules (the embedded OptiX-IR of device/*.cu), one program
 // group per program, the linked pipeline with its stack sizes, and the shader binding table built from a small
 // table of (program group, record) pairs: a ray-generation record, a miss record per ray type, and a hit-group
 // record per (mesh build input, ray type) that carries the mesh's index (optix_launch.h, HitRecordData).
@@ -27,7 +27,8 @@ class OptixPrograms {
     const OptixShaderBindingTable& sbt_wavefront() const { return m_sbt_wavefront; }
 
   private:
-    OptixModule m_module = nullptr;
+    OptixModule m_module = nullptr;            // device/optix_programs.cu
+    OptixModule m_wavefront_module = nullptr;  // device/optix_wavefront_programs.cu
     std::vector<OptixProgramGroup> m_groups;
     OptixPipeline m_pipeline = nullptr;
     DeviceBuffer<unsigned char> m_records;

@@ -31,7 +31,9 @@ class WavefrontLoop {
   private:
     cudaStream_t m_stream;
     NerfSegmentPass m_pass;
-    DeviceBuffer<WavefrontPath> m_paths;
+    DeviceBuffer<uint4> m_path_words;  // PathStore's planes
+    DeviceBuffer<NerfQuery> m_queries;  // two per path
+    uint32_t m_max_paths = 0;
     DeviceBuffer<uint32_t> m_active[2];
     DeviceBuffer<uint32_t> m_queue;  // per path: its queue_word (wavefront.h)
 };
