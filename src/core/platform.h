@@ -6,7 +6,9 @@
 #define NPT_HD __host__ __device__
 #define NPT_INLINE __forceinline__
 #define NPT_UNROLL _Pragma("unroll")  // a loop over a local array: unrolled, the array stays in registers
+#define NPT_DEVICE_NOINLINE __noinline__  // a large function called from a loop: a call, not its body inlined
 #else
+#define NPT_DEVICE_NOINLINE
 #define NPT_HD
 #define NPT_INLINE inline __attribute__((always_inline))
 #define NPT_UNROLL
