@@ -80,10 +80,12 @@ OptixPrograms::OptixPrograms(OptixDeviceContext ctx, const std::vector<uint32_t>
     pipeline_options.exceptionFlags = OPTIX_EXCEPTION_FLAG_NONE;
     pipeline_options.pipelineLaunchParamsVariableName = "params";
     pipeline_options.usesPrimitiveTypeFlags = OPTIX_PRIMITIVE_TYPE_FLAGS_TRIANGLE;
-    // 96 registers per thread for the per-thread program: measured faster than OptiX's default (128) and than
-    // 64 on cornell at 1080p (docs/benchmarks.md); NERFPT_OPTIX_MAX_REGISTERS overrides it for such
-    // measurements.
-    m_module = create_module(ctx, pipeline_options, max_registers("NERFPT_OPTIX_MAX_REGISTERS", 96),
+    // The per-thread program at OptiX's default register limit (128): with the wavefront program in a module
+    // of its own and path_scatter a call, cornell at 1080p ran 303-307 M samples/s against 296-298 at 96
+    // (cornell_volume 54.0 against 53.1), six alternating runs on the H200 (docs/benchmarks.md).
+    // NERFPT_OPTIX_MAX_REGISTERS overrides it for such measurements; the wavefront program measured the same
+    // at 64, 80, 96 and 128.
+    m_module = create_module(ctx, pipeline_options, max_registers("NERFPT_OPTIX_MAX_REGISTERS", 0),
                              k_optix_programs_ir, k_optix_programs_ir_size, "optix_programs");
     // The wavefront form's program, a module of its own: NERFPT_OPTIX_WAVEFRONT_REGISTERS.
     m_wavefront_module = create_module(
