@@ -1,7 +1,9 @@
 // Checks an OpenEXR file's header before OpenEXR reads it. OpenEXR allocates each attribute's value from the
 // size the file states (up to 2 GB) before it finds the file too short, so a 300-byte corrupt file could make a
 // reader allocate gigabytes (found by fuzz_image). Here every attribute's size is checked against the bytes
-// that follow it in the file.
+// that follow it in the file, and, for the types OpenEXR reads by their own layout (fixed-size values, channel
+// lists, previews, string vectors), against that layout: OpenEXR does not check the two agree, and where they
+// differ its reading falls out of step and takes a later value's bytes for the next size.
 #pragma once
 
 #include <filesystem>

@@ -191,6 +191,24 @@ TEST(ImageIoBadInput, ExrAttributeSizePastTheEnd) {
     std::string long_name = bytes.substr(0, 8) + std::string(40, 'x');
     test::write_file(dir / "long.exr", long_name);
     expect_error([&] { read_image(dir / "long.exr"); }, {"long.exr", "longer than 31"});
+    // Sizes inside the file that disagree with the value's layout (fuzz_image: a channel list whose records take
+    // 63 bytes where the file says 55 put OpenEXR out of step; it then asked for 1.7 GB): a channel list stated
+    // shorter than its records, and a fixed-size value (box2i, 16 bytes) stated longer.
+    std::string short_list = bytes;
+    int32_t listed = 0;
+    std::memcpy(&listed, &short_list[at + key.size()], sizeof listed);
+    const int32_t shorter = listed - 8;
+    std::memcpy(&short_list[at + key.size()], &shorter, sizeof shorter);
+    test::write_file(dir / "short_list.exr", short_list);
+    expect_error([&] { read_image(dir / "short_list.exr"); }, {"short_list.exr", "'channels'", "contents"});
+    const std::string box_key = std::string("dataWindow") + '\0' + "box2i" + '\0';
+    const size_t box_at = bytes.find(box_key);
+    ASSERT_NE(box_at, std::string::npos);
+    std::string long_box = bytes;
+    const int32_t box_size = 20;
+    std::memcpy(&long_box[box_at + box_key.size()], &box_size, sizeof box_size);
+    test::write_file(dir / "long_box.exr", long_box);
+    expect_error([&] { read_image(dir / "long_box.exr"); }, {"long_box.exr", "'dataWindow'", "a box2i has 16"});
     // The valid file still reads.
     EXPECT_EQ(read_image(dir / "ok.exr").width, 4);
 }

@@ -16,7 +16,7 @@
 
 #include "core/cuda/device_buffer.h"
 #include "media/volume.h"
-#include "render/gpu/wavefront.h"
+#include "render/gpu/path_store.h"
 
 namespace npt::gpu {
 

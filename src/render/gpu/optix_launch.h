@@ -5,7 +5,7 @@
 
 #include <optix_types.h>
 
-#include "render/gpu/wavefront.h"
+#include "render/gpu/path_store.h"
 #include "render/path_integrator.h"
 #include "render/scene_view.h"
 

@@ -7,11 +7,7 @@
 // (path_scatter). Shared by the OptiX programs, the CUDA pass and the host loop (optix_wavefront.cpp).
 #pragma once
 
-#include <vector_types.h>  // uint4
-
-#include <cstddef>
 #include <cstdint>
-#include <cstring>
 
 #include "core/sobol_sampler.h"
 #include "core/vec.h"
@@ -54,8 +50,8 @@ enum class PathPhase : uint8_t {
 };
 
 // What a path carries from one launch to the next. `vol` first and 16 bytes: the NeRF pass writes it as one
-// word of the path's planes (PathStore); its queries are kept apart (PathStore::queries), written only when
-// queued.
+// word of the path's planes (path_store.h); its queries are kept apart (PathStore::queries), written only
+// when queued.
 struct WavefrontPath {
     media::VolumeResult vol;  // the volumes on [0, hit) of `ray`: set inline or by the NeRF pass
     render::PathState st;
@@ -69,63 +65,6 @@ struct WavefrontPath {
     bool found = false;
     bool shadow_pending = false;
     PathPhase phase = PathPhase::Done;
-};
-
-// The paths of a wave in device memory as planes of 16-byte words: word k of path i at words[k * stride + i].
-// A warp's loads and stores of its paths' states are then coalesced (as an array of 240-byte structs, each
-// 4-byte access of a warp touched 32 sectors, and the launches spent their time there), and the NeRF pass
-// writes a result as one word. Beside them each path's two queries ([2i] the volume ray's, [2i + 1] the
-// shadow ray's), read by the pass only for the segments queued.
-constexpr uint32_t k_path_words = uint32_t((sizeof(WavefrontPath) + 15) / 16);
-struct PathStore {
-    uint4* words = nullptr;
-    uint32_t stride = 0;  // the paths of the wave at most: each plane's length
-    NerfQuery* queries = nullptr;
-};
-
-NPT_HD NPT_INLINE WavefrontPath load_path(const PathStore& s, uint32_t i) {
-    uint4 w[k_path_words];
-NPT_UNROLL
-    for (uint32_t k = 0; k < k_path_words; ++k) w[k] = s.words[size_t(k) * s.stride + i];
-    WavefrontPath p;
-    std::memcpy(static_cast<void*>(&p), w, sizeof p);
-    return p;
-}
-NPT_HD NPT_INLINE void store_path(const PathStore& s, uint32_t i, const WavefrontPath& p) {
-    uint4 w[k_path_words] = {};
-    std::memcpy(w, static_cast<const void*>(&p), sizeof p);
-NPT_UNROLL
-    for (uint32_t k = 0; k < k_path_words; ++k) s.words[size_t(k) * s.stride + i] = w[k];
-}
-
-// The NeRF pass's results, written in place: the volume segment's (one word) or the shadow ray's
-// transmittance.
-constexpr size_t k_shadow_t_offset = offsetof(WavefrontPath, shadow_t);
-static_assert(offsetof(WavefrontPath, vol) == 0 && sizeof(media::VolumeResult) == 16 &&
-                  offsetof(media::VolumeResult, transmittance) == 12,
-              "vol: word 0 of a path, as store_volume_result writes it");
-static_assert(k_shadow_t_offset % 16 + sizeof(float) <= 16, "shadow_t: inside one word");
-NPT_HD NPT_INLINE void store_volume_result(const PathStore& s, uint32_t i, Rgb radiance,
-                                           float transmittance) {
-    uint4 w;
-    const float f[4] = {radiance.x, radiance.y, radiance.z, transmittance};
-    std::memcpy(&w, f, sizeof w);
-    s.words[i] = w;
-}
-NPT_HD NPT_INLINE void store_shadow_transmittance(const PathStore& s, uint32_t i, float transmittance) {
-    uint4* w = s.words + (k_shadow_t_offset / 16) * size_t(s.stride) + i;
-    reinterpret_cast<float*>(w)[(k_shadow_t_offset % 16) / 4] = transmittance;
-}
-
-// A wave of paths: every pixel, `slots` samples each (path i is sample sample_begin + i / pixels of pixel
-// i % pixels).
-struct WavefrontParams {
-    PathStore paths;
-    const uint32_t* active = nullptr;  // the paths of this launch; null in the first launch of a wave
-    uint32_t* queue = nullptr;         // per path: its queue_word after the launch
-    // Which volumes the NeRF pass takes: per scene volume, its slot in the pass, or k_no_query (grids, and
-    // NeRFs the pass cannot evaluate; these are integrated inline).
-    const uint32_t* nerf_slot = nullptr;
 };
 
 // The volumes of `volumes` on [t_begin, t_end] of `ray`: when exactly one volume lies there and it is a NeRF
