@@ -24,7 +24,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     media::GridLoadOptions options;
     // A few bytes may ask for the full 2^28-voxel dense grid (a 4096^3 tile): legitimate, and ~30 s of
     // filling under ASan, past libFuzzer's timeout. Parsing is what is fuzzed; the limit's check still runs.
-    options.max_voxels = size_t(1) << 22;
+    // 2^20: a colour grid on other voxels than the density is resampled voxel by voxel through OpenVDB's
+    // accessor, 0.16 s for 1.5 M voxels in a release build but 27 s under ASan and coverage (the 1 M campaign).
+    options.max_voxels = size_t(1) << 20;
     fuzz::refuse_or_load([&] { media::load_volume_grid(path, options); });
     std::filesystem::remove(path);
     return 0;
