@@ -26,6 +26,20 @@ NerfLayout make_layout(const NerfConfig& config, float aabb_scale) {
     return l;
 }
 
+IntrinsicLayout make_intrinsic_layout(const IntrinsicConfig& config, float aabb_scale) {
+    IntrinsicLayout l;
+    l.grid = config.grid;
+    l.grid.per_level_scale =
+        per_level_scale_for(l.grid.base_resolution, config.finest_resolution * aabb_scale, l.grid.levels);
+    l.mlp = {l.grid.output_dims(), config.width, config.hidden_layers, k_intrinsic_outputs};
+    l.mlp_offset = 0;
+    l.grid_offset = l.mlp.param_count();
+    l.total = l.grid_offset + l.grid.param_count();
+    l.aabb_min = Vec3(0.5f - 0.5f * aabb_scale);
+    l.inv_aabb_scale = 1.0f / aabb_scale;
+    return l;
+}
+
 MarchParams NerfModel::march_params() const {
     MarchParams mp;
     const float half = 0.5f * aabb_scale;

@@ -14,6 +14,7 @@
 #include "nerf/nerf_field.h"
 #include "nerf/occupancy_grid.h"
 #include "nerf/ray_march.h"
+#include "nerf/relight/relight_model.h"
 
 namespace npt::nerf {
 
@@ -37,10 +38,17 @@ struct NerfModel {
     std::vector<float> params;  // what renders: the averaged (EMA) parameters
     OccupancyGrid occupancy;
     std::optional<TrainingState> training;
+    std::optional<RelightFields> relight;  // present for relightable models (`nerfpt train --relightable`)
 
     NerfLayout layout() const { return make_layout(config, aabb_scale); }
     NerfFieldView field() const { return {layout(), params.data()}; }
     MarchParams march_params() const;
+    bool relightable() const { return relight.has_value() && !relight->params.empty(); }
+    // The intrinsic fields for renderers; invalid (params nullptr) when the model is not relightable.
+    IntrinsicFieldView intrinsic() const {
+        if (!relightable()) return {};
+        return {make_intrinsic_layout(relight->config, aabb_scale), relight->params.data()};
+    }
 };
 
 // A fresh model for a data set: parameters initialised (hash grid uniform in +-1e-4, MLP weights
