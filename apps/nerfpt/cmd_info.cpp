@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "nerf/model_file.h"
+#include "nerf/relight/relight_env.h"
 #include "scene/scene.h"
 
 namespace npt::cli {
@@ -183,6 +184,46 @@ CLI::App* add_info_command(CLI::App& app, InfoArgs& args) {
 
 namespace {
 
+// Whether the model is relightable, and the capture light its relight stage estimated.
+void print_relight(const nerf::NerfModel& m) {
+    if (!m.relightable()) {
+        fmt::print("relight    no: emissive only (train with --relightable to light it by a scene)\n");
+        return;
+    }
+    const nerf::RelightFields& r = *m.relight;
+    fmt::print("relight    yes: intrinsic grid {} levels x {}, 2^{} entries, MLP {}x{}; {} steps, {:.0f} s\n",
+               r.config.grid.levels, r.config.grid.features_per_level, r.config.grid.log2_table_size,
+               r.config.hidden_layers, r.config.width, r.steps, r.seconds);
+    const nerf::CaptureEnvironment& env = r.capture_env;
+    Rgb mean(0.0f);
+    double total = 0, best = -1;
+    Vec3 best_dir(0.0f);
+    for (int j = 0; j < env.height; ++j)
+        for (int i = 0; i < env.width; ++i) {
+            const Rgb& t = env.texels[size_t(j) * env.width + i];
+            const float w = nerf::env_texel_solid_angle(env.width, env.height, j);
+            mean += t * w;
+            total += w;
+            const double lum = 0.2126 * t.x + 0.7152 * t.y + 0.0722 * t.z;
+            if (lum > best) {
+                best = lum;
+                best_dir = nerf::env_texel_direction(env.width, env.height, i, j);
+            }
+        }
+    mean = mean / float(total);
+    const Vec3 world_dir = normalize(m.world_to_model.inverse().transform_vector(best_dir));
+    fmt::print("  capture light {}x{} environment, mean radiance {}, brightest toward {} (training world)\n",
+               env.width, env.height, vec(mean), vec(world_dir));
+    if (!r.exposure.empty()) {
+        float lo = INFINITY, hi = 0;
+        for (const Rgb& e : r.exposure) {
+            lo = std::min(lo, e.x);
+            hi = std::max(hi, e.x);
+        }
+        fmt::print("  exposures of {} images: {:.3f} .. {:.3f}\n", r.exposure.size(), lo, hi);
+    }
+}
+
 // A model file: what it is, how far it was trained, and where its content lies (to place it in a scene).
 int print_model_info(const std::string& path) {
     const nerf::NerfModel m = nerf::load_model(path);
@@ -200,6 +241,7 @@ int print_model_info(const std::string& path) {
                    m.training->adam.step, m.training->elapsed_seconds);
     else
         fmt::print("training   no training state (render/evaluate only)\n");
+    print_relight(m);
     fmt::print("occupancy  {} cascade(s) of {}^3, {:.1f}% occupied\n", m.occupancy.cascades(),
                m.occupancy.resolution(), 100.0 * m.occupancy.occupied_fraction());
     // Where the content is: the occupied cells of the finest cascade that has any, in model space and in the

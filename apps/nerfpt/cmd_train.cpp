@@ -18,6 +18,7 @@
 #include "nerf/model_file.h"
 #include "backend_option.h"
 #include "nerf/trainer.h"
+#include "relight_stage.h"
 
 namespace npt::cli {
 namespace fs = std::filesystem;
@@ -61,6 +62,15 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "Steps between checkpoints (default: the config's, 500)")
         ->check(CLI::Range(1, 100000000));
     add_backend_option(cmd, args.backend);
+    cmd->add_flag("--relightable", args.relightable,
+                  "After training, fit albedo, roughness and normals and estimate the capture light, so that "
+                  "renders light the object with the scene's lights (with --resume: adds them to a trained model)");
+    cmd->add_option("--relight-steps", args.relight_steps, "Optimiser steps of the relight stage (default: 1500)")
+        ->check(CLI::Range(uint64_t(1), uint64_t(10000000)));
+    cmd->add_option("--relight-points", args.relight_points,
+                    "Surface points the relight stage fits, one per training ray that hits the object "
+                    "(default: 16384)")
+        ->check(CLI::Range(64, 1 << 22));
     cmd->add_flag("--resume", args.resume, "Continue training the model in --output where it stopped");
     cmd->add_flag("--force", args.force, "Overwrite --output if it exists (without --resume)")
         ->excludes(cmd->get_option("--resume"));
@@ -204,6 +214,15 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     }
     progress.update(stats, 1.0, rays_ema, model.training->elapsed_seconds, true);
     progress.finish();
+    if (args.relightable && !interrupted) {
+        save();  // the NeRF is safe on disk before the relight stage starts
+        trainer.sync_model();
+        RelightStageOptions ro;
+        ro.steps = args.relight_steps;
+        ro.points = args.relight_points;
+        ro.quiet = global.quiet;
+        interrupted = !run_relight_stage(model, data, ro, interrupts);
+    }
     const auto& pt = phase_total;
     if (backend == nerf::Backend::cpu)
         spdlog::debug("time per phase: march {:.1f} s, field forward {:.1f} s, loss {:.1f} s, MLP backward {:.1f} s, "
@@ -217,7 +236,8 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     if (interrupted) {
         const std::string hint = !args.resume_hint.empty()
                                      ? args.resume_hint
-                                     : fmt::format("nerfpt train {} -o {} --resume", args.data, args.output);
+                                     : fmt::format("nerfpt train {} -o {} --resume{}", args.data, args.output,
+                                                   args.relightable ? " --relightable" : "");
         fmt::print(stderr, "nerfpt: interrupted; continue with: {}\n", hint);
         return 128 + interrupts.stop_signal();
     }

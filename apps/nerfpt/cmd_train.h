@@ -22,6 +22,9 @@ struct TrainArgs {
     std::string backend;  // "", cpu or cuda (backend_option.h)
     int checkpoint_every = 0;  // 0: the config's
     bool resume = false;
+    bool relightable = false;        // run the relight stage after training (relight_stage.h)
+    uint64_t relight_steps = 1500;
+    int relight_points = 16384;
     bool force = false;
     // The command that continues after an interrupt, printed then; empty: this train command with --resume.
     std::string resume_hint;

@@ -21,6 +21,7 @@
 #include "core/error.h"
 #include "core/json_file.h"
 #include "core/temp_file.h"
+#include "nerf/relight/relight_section.h"
 
 namespace npt::nerf {
 
@@ -265,6 +266,7 @@ struct RawModel {
     uint32_t cascades = 0, resolution = 0;
     std::optional<TrainingState> training;
     uint64_t training_step = 0, training_count = 0;
+    std::optional<std::vector<uint8_t>> relight;  // RLIT's payload, decoded once the checksum has vouched for it
 };
 
 void check_finite(const std::vector<float>& x, const Reader& in, const char* what) {
@@ -365,6 +367,9 @@ RawModel read_sections(Reader& in) {
                 in.read(v->data(), n * 4);
             }
             t.adam.step = raw.training_step;
+        } else if (tag == "RLIT") {
+            raw.relight.emplace(size_t(length));
+            in.read(raw.relight->data(), raw.relight->size());
         } else {
             in.skip(length);  // a section from a newer writer that this version does not need
         }
@@ -415,6 +420,15 @@ void save_model(const fs::path& path, const NerfModel& model, bool with_training
         if (!std::isfinite(training->elapsed_seconds)) throw refuse("elapsed_seconds is not finite");
     }
 
+    std::vector<uint8_t> relight;
+    if (model.relight) {
+        try {
+            relight = encode_relight_section(*model.relight, model.aabb_scale);
+        } catch (const Error& e) {
+            throw refuse(e.what());
+        }
+    }
+
     const std::string conf = config_to_json(model.config).dump(2);
     AtomicWriter out(path);
     out.write(k_magic, 8);
@@ -441,6 +455,10 @@ void save_model(const fs::path& path, const NerfModel& model, bool with_training
         out.put(uint64_t(total));
         for (const auto* v : {&training->params, &training->adam.m, &training->adam.v, &training->adam.ema})
             out.write(v->data(), 4 * total);
+    }
+    if (model.relight) {
+        out.section("RLIT", relight.size());
+        out.write(relight.data(), relight.size());
     }
     out.commit(out.hash());
 }
@@ -503,6 +521,8 @@ NerfModel load_model(const fs::path& path) {
         check_finite(t.adam.ema, in, "optimizer state ema");
         model.training = std::move(t);
     }
+    if (raw.relight)
+        model.relight = decode_relight_section(raw.relight->data(), raw.relight->size(), in.name(), model.aabb_scale);
     return model;
 }
 

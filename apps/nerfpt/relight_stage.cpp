@@ -1,0 +1,90 @@
+#include "relight_stage.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdio>
+
+#include "core/progress.h"
+#include "interrupt.h"
+#include "nerf/relight/relight_samples.h"
+#include "nerf/relight/relight_trainer.h"
+#include "nerf/trainer.h"
+
+namespace npt::cli {
+
+namespace {
+
+// One status line, a bar on a terminal, a line every few seconds in a log.
+class StageLine {
+  public:
+    explicit StageLine(bool quiet) : m_quiet(quiet), m_tty(stream_is_tty(stderr)) {}
+    void show(const std::string& text, bool force) {
+        if (m_quiet) return;
+        const double now = Progress::steady_seconds();
+        if (!force && now < m_next) return;
+        m_next = now + (m_tty ? 0.2 : 5.0);
+        if (m_tty) {
+            fmt::print(stderr, "\r{}\x1b[K", text);
+            m_open = true;
+        } else {
+            fmt::print(stderr, "{}\n", text);
+        }
+    }
+    void finish() {
+        if (m_open) fmt::print(stderr, "\n");
+        m_open = false;
+    }
+
+  private:
+    bool m_quiet, m_tty;
+    bool m_open = false;
+    double m_next = 0;
+};
+
+}  // namespace
+
+bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const RelightStageOptions& options,
+                       InterruptGuard& interrupts) {
+    const auto t0 = std::chrono::steady_clock::now();
+    nerf::RelightSampleSettings ss;
+    ss.points = options.points;
+    ss.directions = options.directions;
+    ss.seed = model.config.training.seed;
+    StageLine line(options.quiet);
+    const nerf::RelightSamples samples = nerf::gather_relight_samples(model, data, ss, [&](size_t done, size_t total) {
+        line.show(fmt::format("relight: surface points {} {:3.0f}% {}/{}", format_bar(double(done) / total, 20),
+                              100.0 * done / total, done, total),
+                  done == total);
+    });
+    line.finish();
+    const double gather_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    spdlog::info("relight: {} surface points x {} directions in {:.1f} s", samples.size(), samples.directions,
+                 gather_s);
+    if (interrupts.stop_requested()) return false;
+
+    nerf::RelightTrainSettings ts;
+    ts.seed = model.config.training.seed;
+    nerf::RelightTrainer trainer(model, data.cameras.size(), samples, ts);
+    nerf::RelightStepStats st;
+    while (trainer.steps_done() < options.steps) {
+        st = trainer.step();
+        const double frac = double(trainer.steps_done()) / double(options.steps);
+        line.show(fmt::format("relight: fit {} {:3.0f}% step {} psnr {:.2f} dB normal {:.4f}", format_bar(frac, 20),
+                              100.0 * frac, st.step, nerf::psnr_from_mse(st.mse), st.normal_loss),
+                  trainer.steps_done() == options.steps);
+        if (interrupts.stop_requested()) {
+            line.finish();
+            return false;
+        }
+    }
+    line.finish();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    model.relight = trainer.fields(seconds);
+    spdlog::info("relight: {} steps, last batch psnr {:.2f} dB (sRGB, the capture light), {:.1f} s in all",
+                 trainer.steps_done(), nerf::psnr_from_mse(st.mse), seconds);
+    return true;
+}
+
+}  // namespace npt::cli

@@ -1,0 +1,26 @@
+// `nerfpt train --relightable`: the relight stage after the NeRF's own training (nerf/relight/): surface points
+// from the training images, then the intrinsic fields, the capture environment and the exposures, with progress
+// lines; the result goes into the model's relight section.
+#pragma once
+
+#include <cstdint>
+
+#include "nerf/dataset.h"
+#include "nerf/nerf_model.h"
+
+namespace npt::cli {
+
+class InterruptGuard;
+
+struct RelightStageOptions {
+    uint64_t steps = 1500;  // optimiser steps of the stage
+    int points = 16384;
+    int directions = 64;
+    bool quiet = false;
+};
+
+// Returns false when interrupted (the model keeps whatever relight section it had before).
+bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const RelightStageOptions& options,
+                       InterruptGuard& interrupts);
+
+}  // namespace npt::cli

@@ -1,0 +1,59 @@
+// The capture environment's equirectangular map (relight_model.h: CaptureEnvironment) in model-space
+// directions: u = atan2(d.y, d.x) / 2pi + 0.5 across, v = acos(d.z) / pi down. Bilinear lookups with their four
+// texel weights, so the relight trainer can push a gradient into the texels it read.
+#pragma once
+
+#include <math.h>
+
+#include "core/platform.h"
+#include "core/vec.h"
+
+namespace npt::nerf {
+
+struct EnvTaps {
+    int index[4];
+    float weight[4];
+};
+
+// Texel centres sit at ((i + 0.5) / W, (j + 0.5) / H); u wraps around, v clamps at the poles.
+NPT_HD NPT_INLINE EnvTaps env_taps(int width, int height, Vec3 d) {
+    constexpr float k_pi = 3.14159265358979f;
+    const float u = atan2f(d.y, d.x) * (0.5f / k_pi) + 0.5f;
+    const float v = acosf(fminf(1.0f, fmaxf(-1.0f, d.z))) * (1.0f / k_pi);
+    const float x = u * float(width) - 0.5f, y = v * float(height) - 0.5f;
+    const float fx = floorf(x), fy = floorf(y);
+    const float ax = x - fx, ay = y - fy;
+    int x0 = int(fx), y0 = int(fy);
+    int x1 = x0 + 1, y1 = y0 + 1;
+    x0 = ((x0 % width) + width) % width;
+    x1 = ((x1 % width) + width) % width;
+    y0 = y0 < 0 ? 0 : (y0 >= height ? height - 1 : y0);
+    y1 = y1 < 0 ? 0 : (y1 >= height ? height - 1 : y1);
+    EnvTaps t;
+    t.index[0] = y0 * width + x0;
+    t.index[1] = y0 * width + x1;
+    t.index[2] = y1 * width + x0;
+    t.index[3] = y1 * width + x1;
+    t.weight[0] = (1.0f - ax) * (1.0f - ay);
+    t.weight[1] = ax * (1.0f - ay);
+    t.weight[2] = (1.0f - ax) * ay;
+    t.weight[3] = ax * ay;
+    return t;
+}
+
+// The direction through texel (i, j)'s centre.
+NPT_HD NPT_INLINE Vec3 env_texel_direction(int width, int height, int i, int j) {
+    constexpr float k_pi = 3.14159265358979f;
+    const float phi = ((float(i) + 0.5f) / float(width) - 0.5f) * 2.0f * k_pi;
+    const float theta = (float(j) + 0.5f) / float(height) * k_pi;
+    return Vec3(sinf(theta) * cosf(phi), sinf(theta) * sinf(phi), cosf(theta));
+}
+
+// The solid angle of a texel in row j.
+NPT_HD NPT_INLINE float env_texel_solid_angle(int width, int height, int j) {
+    constexpr float k_pi = 3.14159265358979f;
+    const float t0 = float(j) / float(height) * k_pi, t1 = float(j + 1) / float(height) * k_pi;
+    return (cosf(t0) - cosf(t1)) * 2.0f * k_pi / float(width);
+}
+
+}  // namespace npt::nerf

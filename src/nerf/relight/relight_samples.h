@@ -1,0 +1,51 @@
+// The relight stage's data: points on the object seen by training pixels, each with what the trained NeRF says
+// about its surroundings. One point per training ray, drawn from the ray's volume weights exactly as the relit
+// renderer draws its scattering events; at each point the density normal and, for a fixed set of directions over
+// its hemisphere, the transmittance toward the environment and the radiance the NeRF sends back from that
+// direction (the object's own light under the capture illumination: the indirect light). Computed once, before
+// the optimisation, on the CPU (TBB), deterministically for a seed.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "core/vec.h"
+#include "nerf/dataset.h"
+#include "nerf/nerf_model.h"
+
+namespace npt::nerf {
+
+struct RelightSampleSettings {
+    int points = 16384;           // surface points (training rays that hit the object)
+    int directions = 64;          // light directions per point, stratified over the normal's hemisphere
+    float normal_step = 0.004f;   // model units: central-difference step of the density gradient
+    float min_alpha = 0.99f;      // pixels more transparent than this in the image are not used
+    uint64_t seed = 1;
+};
+
+struct RelightSamples {
+    int directions = 0;
+    // Per point, model space.
+    std::vector<Vec3> position;  // the scattering event
+    std::vector<Vec3> wo;        // unit direction toward the camera
+    std::vector<Vec3> normal;    // -grad(log sigma), unit, turned toward wo
+    std::vector<Rgb> target;     // the pixel's colour, linear
+    std::vector<uint32_t> image;  // training image index
+    // Per point and direction ([point * directions + k]).
+    std::vector<Vec3> dir;          // unit, model space
+    std::vector<float> visibility;  // transmittance through the model from the offset point to the environment
+    std::vector<Rgb> indirect;      // linear radiance arriving along -dir from the model itself
+
+    size_t size() const { return position.size(); }
+};
+
+// Called with (points done, points wanted); from worker threads, never two calls at once.
+using RelightProgressFn = std::function<void(size_t, size_t)>;
+
+// Throws npt::Error when the model sees (almost) nothing of the object: fewer than 1% of the points found.
+RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& data,
+                                      const RelightSampleSettings& settings,
+                                      const RelightProgressFn& progress = {});
+
+}  // namespace npt::nerf

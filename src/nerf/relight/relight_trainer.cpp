@@ -1,0 +1,313 @@
+#include "nerf/relight/relight_trainer.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/error.h"
+#include "core/rng.h"
+#include "materials/bsdf.h"
+#include "nerf/mlp_batch.h"
+#include "nerf/relight/relight_env.h"
+
+namespace npt::nerf {
+
+namespace {
+
+constexpr size_t k_chunk = 128;           // points per parallel task; gradients summed in chunk order
+constexpr float k_roughness_step = 0.01f;  // finite difference of the BSDF in roughness
+constexpr float k_two_pi = 6.28318530717959f;
+
+OptimizerConfig relight_optimizer(float lr) {
+    OptimizerConfig c;
+    c.learning_rate = lr;
+    c.decay_start = 1 << 30;  // no decay: the stage is short
+    c.ema_decay = 0.95f;
+    return c;
+}
+
+// sRGB encoding of a non-negative linear value and its derivative (the loss is taken where the score is).
+inline float srgb_encode(float x, float* d) {
+    if (x <= 0.0031308f) {
+        *d = 12.92f;
+        return 12.92f * std::max(x, 0.0f);
+    }
+    const float p = std::pow(x, 1.0f / 2.4f);
+    *d = 1.055f / 2.4f * p / x;
+    return 1.055f * p - 0.055f;
+}
+
+inline float sigmoid_grad(float s) { return s * (1.0f - s); }
+
+// The BSDF split as f = base * diffuse + specular for a dielectric Principled lobe (F0 grey): diffuse is the
+// colour-independent factor of the base colour, specular the rest.
+struct BsdfSplit {
+    float diffuse;
+    float specular;
+};
+
+inline BsdfSplit split_bsdf(float roughness, Vec3 wo, Vec3 wi) {
+    IntrinsicSample s;
+    s.roughness = roughness;
+    s.albedo = Rgb(1.0f);
+    const float f1 = materials::bsdf_eval(intrinsic_bsdf(s), wo, wi).x;
+    s.albedo = Rgb(0.0f);
+    const float f0 = materials::bsdf_eval(intrinsic_bsdf(s), wo, wi).x;
+    return {f1 - f0, f0};
+}
+
+void init_mlp(const MlpShape& s, float* w, Pcg32& rng) {
+    for (int l = 0; l < s.layer_count(); ++l) {
+        const int ni = s.layer_inputs(l), no = s.layer_outputs(l);
+        const float limit = std::sqrt(6.0f / float(ni + no));
+        float* lw = w + s.layer_offset(l);
+        for (int i = 0; i < ni * no; ++i) lw[i] = (2.0f * rng.next_float() - 1.0f) * limit;
+    }
+}
+
+}  // namespace
+
+RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const RelightSamples& samples,
+                               const RelightTrainSettings& settings)
+    : m_samples(samples),
+      m_settings(settings),
+      m_layout(make_intrinsic_layout(settings.intrinsic, model.aabb_scale)),
+      m_images(image_count),
+      m_adam(relight_optimizer(settings.learning_rate), 0, 0, 0) {
+    if (samples.size() == 0) throw Error("relight: no surface points to train on");
+    if (settings.env_width < 2 || settings.env_height < 1 || settings.batch < 1)
+        throw Error("relight: the environment needs at least 2x1 texels and the batch one point");
+    for (uint32_t img : samples.image)
+        if (img >= image_count) throw Error("relight: a point refers to image " + std::to_string(img));
+    m_env_offset = m_layout.total;
+    m_exposure_offset = m_env_offset + size_t(settings.env_width) * settings.env_height * 3;
+    m_total = m_exposure_offset + image_count;
+    m_params.assign(m_total, 0.0f);
+    m_grads.assign(m_total, 0.0f);
+    Pcg32 rng(settings.seed, 0x1a7b);
+    init_mlp(m_layout.mlp, m_params.data() + m_layout.mlp_offset, rng);
+    for (size_t i = m_layout.grid_offset; i < m_layout.total; ++i)
+        m_params[i] = (2.0f * rng.next_float() - 1.0f) * 1e-4f;
+    // A uniform grey environment that gives the mean pixel on a mid-grey unshadowed diffuse surface.
+    double mean = 0;
+    for (const Rgb& t : samples.target) mean += (t.x + t.y + t.z) / 3.0;
+    mean /= double(samples.size());
+    const float env0 = std::log(float(std::max(mean, 1e-3) / 0.5));
+    std::fill(m_params.begin() + m_env_offset, m_params.begin() + m_exposure_offset, env0);
+    m_adam = Adam(relight_optimizer(settings.learning_rate), m_total, m_layout.mlp_offset, m_layout.grid_offset);
+}
+
+RelightStepStats RelightTrainer::step() {
+    const auto t0 = std::chrono::steady_clock::now();
+    RelightStepStats stats = compute_gradient();
+    m_adam.step(m_params.data(), m_grads.data());
+    stats.step = m_adam.state().step;
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return stats;
+}
+
+RelightStepStats RelightTrainer::gradient(std::vector<float>& grads) {
+    RelightStepStats stats = compute_gradient();
+    grads = m_grads;
+    return stats;
+}
+
+RelightStepStats RelightTrainer::compute_gradient() {
+    const RelightSamples& S = m_samples;
+    const int K = S.directions;
+    const int W = m_settings.env_width, H = m_settings.env_height;
+    const size_t n_env = size_t(W) * H;
+    const uint64_t step = m_adam.state().step;
+    const size_t batch = size_t(m_settings.batch);
+    const float* params = m_params.data();
+
+    std::vector<uint32_t> pick(batch);
+    Pcg32 rng(mix64(m_settings.seed ^ 0x62617463ULL), step);
+    for (auto& p : pick) p = rng.next_u32() % uint32_t(S.size());
+    std::vector<Rgb> env(n_env);
+    for (size_t t = 0; t < n_env; ++t)
+        env[t] = Rgb(std::exp(params[m_env_offset + 3 * t]), std::exp(params[m_env_offset + 3 * t + 1]),
+                     std::exp(params[m_env_offset + 3 * t + 2]));
+
+    const int dims = m_layout.grid.output_dims();
+    const MlpShape& shape = m_layout.mlp;
+    const size_t n_chunks = (batch + k_chunk - 1) / k_chunk;
+    const size_t mlp_params = shape.param_count();
+    struct Chunk {
+        std::vector<float> enc, out, d_out, d_enc, d_mlp, d_env, d_exposure;
+        MlpActivations acts;
+        double loss = 0, se = 0, normal_loss = 0;
+    };
+    std::vector<Chunk> chunks(n_chunks);
+    const HashLevels levels = hash_levels(m_layout.grid);
+    const float inv_batch = 1.0f / float(batch);
+    const float dir_weight = k_two_pi / float(K);
+
+    tbb::parallel_for(size_t(0), n_chunks, [&](size_t c) {
+        Chunk& ch = chunks[c];
+        const size_t b = c * k_chunk, n = std::min(k_chunk, batch - b);
+        ch.enc.resize(n * dims);
+        ch.out.resize(n * k_intrinsic_outputs);
+        ch.d_out.assign(n * k_intrinsic_outputs, 0.0f);
+        ch.d_enc.resize(n * dims);
+        ch.d_mlp.assign(mlp_params, 0.0f);
+        ch.d_env.assign(n_env * 3, 0.0f);
+        ch.d_exposure.assign(m_images, 0.0f);
+        for (size_t i = 0; i < n; ++i)
+            hash_encode(m_layout.grid, levels, params + m_layout.grid_offset,
+                        m_layout.grid_position(S.position[pick[b + i]]), &ch.enc[i * dims]);
+        mlp_forward_batch(shape, params + m_layout.mlp_offset, ch.enc.data(), n, ch.out.data(), &ch.acts);
+        std::vector<Rgb> lin(static_cast<size_t>(K));
+        std::vector<float> wk(static_cast<size_t>(K));
+        for (size_t i = 0; i < n; ++i) {
+            const uint32_t s = pick[b + i];
+            const float* o = &ch.out[i * k_intrinsic_outputs];
+            float* d_o = &ch.d_out[i * k_intrinsic_outputs];
+            const IntrinsicSample is = intrinsic_from_outputs(o);
+            // Shaded with the density normal, which the predicted normal learns to follow (its own loss below):
+            // the photometric term then has an exact gradient and does not pull the normals toward whatever
+            // explains a shadow or a texture.
+            const Vec3 wo_w = S.wo[s];
+            const Frame frame = Frame::from_z(S.normal[s]);
+            const Vec3 wo = frame.to_local(wo_w);
+            const float r = is.roughness;
+            const float r2 = r + k_roughness_step <= 1.0f ? r + k_roughness_step : r - k_roughness_step;
+            const float dr = r2 - r;
+            Rgb acc_d(0.0f), acc_s(0.0f), acc_d2(0.0f), acc_s2(0.0f);
+            for (int k = 0; k < K; ++k) {
+                const size_t sk = size_t(s) * K + k;
+                const Vec3 wi = frame.to_local(S.dir[sk]);
+                wk[k] = 0.0f;
+                if (wi.z <= 0.0f || wo.z <= 0.0f) continue;
+                const EnvTaps taps = env_taps(W, H, S.dir[sk]);
+                Rgb le(0.0f);
+                for (int j = 0; j < 4; ++j) le += env[taps.index[j]] * taps.weight[j];
+                lin[k] = le * S.visibility[sk] + S.indirect[sk];
+                const BsdfSplit f = split_bsdf(r, wo, wi), f2 = split_bsdf(r2, wo, wi);
+                const float w = dir_weight * wi.z;
+                acc_d += lin[k] * (f.diffuse * w);
+                acc_s += lin[k] * (f.specular * w);
+                acc_d2 += lin[k] * (f2.diffuse * w);
+                acc_s2 += lin[k] * (f2.specular * w);
+                wk[k] = w;
+            }
+            const float e = std::exp(params[m_exposure_offset + S.image[s]]);
+            Rgb d_c;  // dLoss/dC
+            double se = 0;
+            Rgb pred;
+            for (int ch3 = 0; ch3 < 3; ++ch3) {
+                pred[ch3] = e * (is.albedo[ch3] * acc_d[ch3] + acc_s[ch3]);
+                float dp, dt;
+                const float diff = srgb_encode(pred[ch3], &dp) - srgb_encode(S.target[s][ch3], &dt);
+                se += double(diff) * diff;
+                d_c[ch3] = diff * dp * inv_batch;
+            }
+            ch.loss += 0.5 * se;
+            ch.se += se;
+            // Albedo and roughness.
+            float d_r = 0.0f, d_e = 0.0f;
+            for (int ch3 = 0; ch3 < 3; ++ch3) {
+                d_o[ch3] = d_c[ch3] * e * acc_d[ch3] * sigmoid_grad(is.albedo[ch3]);
+                d_r += d_c[ch3] * e *
+                       (is.albedo[ch3] * (acc_d2[ch3] - acc_d[ch3]) + (acc_s2[ch3] - acc_s[ch3])) / dr;
+                d_e += d_c[ch3] * pred[ch3];  // dC/d(log e) = C
+            }
+            const float sr = (r - k_min_roughness) / (1.0f - k_min_roughness);
+            d_o[3] = d_r * (1.0f - k_min_roughness) * sigmoid_grad(sr);
+            ch.d_exposure[S.image[s]] += d_e;
+            // The environment texels each direction read.
+            for (int k = 0; k < K; ++k) {
+                if (wk[k] == 0.0f) continue;
+                const size_t sk = size_t(s) * K + k;
+                if (S.visibility[sk] <= 0.0f) continue;
+                const EnvTaps taps = env_taps(W, H, S.dir[sk]);
+                const Vec3 wi = frame.to_local(S.dir[sk]);
+                const BsdfSplit f = split_bsdf(r, wo, wi);
+                for (int ch3 = 0; ch3 < 3; ++ch3) {
+                    const float g = d_c[ch3] * e * (is.albedo[ch3] * f.diffuse + f.specular) * wk[k] *
+                                    S.visibility[sk];
+                    for (int j = 0; j < 4; ++j)
+                        ch.d_env[size_t(taps.index[j]) * 3 + ch3] += g * taps.weight[j] * env[taps.index[j]][ch3];
+                }
+            }
+            // The normal output follows the density normal.
+            const Vec3 raw(o[4], o[5], o[6]);
+            const float len = std::max(length(raw), 1e-6f);
+            const Vec3 nh = raw / len;
+            const Vec3 diff = nh - S.normal[s];
+            ch.normal_loss += dot(diff, diff);
+            const Vec3 d_nh = diff * (2.0f * m_settings.normal_weight * inv_batch);
+            const Vec3 d_raw = (d_nh - nh * dot(nh, d_nh)) / len;
+            d_o[4] = d_raw.x;
+            d_o[5] = d_raw.y;
+            d_o[6] = d_raw.z;
+        }
+        mlp_backward_batch(shape, params + m_layout.mlp_offset, ch.enc.data(), ch.acts, ch.d_out.data(),
+                           ch.d_mlp.data(), ch.d_enc.data());
+    });
+
+    std::fill(m_grads.begin(), m_grads.end(), 0.0f);
+    float* grads = m_grads.data();
+    RelightStepStats stats;
+    for (size_t c = 0; c < n_chunks; ++c) {
+        const Chunk& ch = chunks[c];
+        for (size_t i = 0; i < mlp_params; ++i) grads[m_layout.mlp_offset + i] += ch.d_mlp[i];
+        for (size_t i = 0; i < n_env * 3; ++i) grads[m_env_offset + i] += ch.d_env[i];
+        if (m_settings.learn_exposure)
+            for (size_t i = 0; i < m_images; ++i) grads[m_exposure_offset + i] += ch.d_exposure[i];
+        const size_t b = c * k_chunk, n = std::min(k_chunk, batch - b);
+        for (size_t i = 0; i < n; ++i)
+            hash_encode_backward(m_layout.grid, m_layout.grid_position(S.position[pick[b + i]]), &ch.d_enc[i * dims],
+                                 grads + m_layout.grid_offset);
+        stats.loss += ch.loss;
+        stats.mse += ch.se;
+        stats.normal_loss += ch.normal_loss;
+    }
+    // Priors: a grey mean environment, exposures around 1.
+    double mean_log[3] = {0, 0, 0};
+    for (size_t t = 0; t < n_env; ++t)
+        for (int c = 0; c < 3; ++c) mean_log[c] += params[m_env_offset + 3 * t + c];
+    for (double& m : mean_log) m /= double(n_env);
+    const double grey = (mean_log[0] + mean_log[1] + mean_log[2]) / 3.0;
+    for (size_t t = 0; t < n_env; ++t)
+        for (int c = 0; c < 3; ++c)
+            grads[m_env_offset + 3 * t + c] += float(2.0 * m_settings.grey_weight * (mean_log[c] - grey) / n_env);
+    double prior = 0;
+    for (int c = 0; c < 3; ++c) prior += m_settings.grey_weight * (mean_log[c] - grey) * (mean_log[c] - grey);
+    if (m_settings.learn_exposure)
+        for (size_t i = 0; i < m_images; ++i) {
+            const float le = params[m_exposure_offset + i];
+            grads[m_exposure_offset + i] += 2.0f * m_settings.exposure_weight * le / float(m_images);
+            prior += m_settings.exposure_weight * double(le) * le / double(m_images);
+        }
+    stats.step = m_adam.state().step;
+    stats.loss /= double(batch);
+    stats.mse /= 3.0 * double(batch);
+    stats.normal_loss /= double(batch);
+    stats.objective = stats.loss + m_settings.normal_weight * stats.normal_loss + prior;
+    return stats;
+}
+
+RelightFields RelightTrainer::fields(double seconds) const {
+    std::vector<float> avg(m_total);
+    m_adam.averaged_params(m_params.data(), avg.data());
+    RelightFields f;
+    f.config = m_settings.intrinsic;
+    f.params.assign(avg.begin(), avg.begin() + m_layout.total);
+    f.capture_env.width = m_settings.env_width;
+    f.capture_env.height = m_settings.env_height;
+    const size_t n_env = size_t(m_settings.env_width) * m_settings.env_height;
+    f.capture_env.texels.resize(n_env);
+    for (size_t t = 0; t < n_env; ++t)
+        f.capture_env.texels[t] = Rgb(std::exp(avg[m_env_offset + 3 * t]), std::exp(avg[m_env_offset + 3 * t + 1]),
+                                      std::exp(avg[m_env_offset + 3 * t + 2]));
+    f.exposure.resize(m_images);
+    for (size_t i = 0; i < m_images; ++i) f.exposure[i] = Rgb(std::exp(avg[m_exposure_offset + i]));
+    f.steps = steps_done();
+    f.seconds = seconds;
+    return f;
+}
+
+}  // namespace npt::nerf

@@ -1,0 +1,70 @@
+// The relight stage: fits the intrinsic fields (albedo, roughness, normal: intrinsic_field.h), the capture
+// environment and an exposure per image to the training pixels, with the trained NeRF's density fixed. For each
+// point of RelightSamples the predicted colour is
+//   C = e_image * (2 pi / K) sum_k (V_k L_env(w_k) + R_k) f(a, r, n; w_o, w_k) max(0, n . w_k)
+// (Monte Carlo over the hemisphere with the precomputed visibility V and the NeRF's indirect light R), with f the
+// relit renderer's BSDF (intrinsic_bsdf) in the frame of the density normal n, compared with the pixel in sRGB
+// (squared error). The normal output learns the density normal by its own loss: the renderer shades with it. Albedo against light has a per-channel scale no image can fix: the prior is
+// an environment whose mean is grey (equal mean log radiance in R, G and B), and exposures whose mean log is 0.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "nerf/adam.h"
+#include "nerf/nerf_model.h"
+#include "nerf/relight/relight_samples.h"
+
+namespace npt::nerf {
+
+struct RelightTrainSettings {
+    IntrinsicConfig intrinsic;
+    int env_width = 32, env_height = 16;
+    int batch = 1024;               // points per step
+    float learning_rate = 1e-2f;
+    float normal_weight = 0.3f;     // weight of |n_pred - n_density|^2 against the photometric loss
+    float grey_weight = 1.0f;       // the grey-environment prior
+    float exposure_weight = 0.1f;   // pulls log exposures toward 0
+    bool learn_exposure = true;
+    uint64_t seed = 7;
+};
+
+struct RelightStepStats {
+    uint64_t step = 0;
+    double loss = 0;          // photometric Huber loss per point (sRGB)
+    double mse = 0;           // per channel, sRGB, for a PSNR
+    double normal_loss = 0;   // mean |n_pred - n_density|^2
+    double objective = 0;     // what the gradient is of: photometric + weighted normal loss + priors
+    double seconds = 0;
+};
+
+class RelightTrainer {
+  public:
+    RelightTrainer(const NerfModel& model, size_t image_count, const RelightSamples& samples,
+                   const RelightTrainSettings& settings);
+    RelightStepStats step();
+    uint64_t steps_done() const { return m_adam.state().step; }
+    // The gradient step() would apply next (the same batch), into grads; nothing changes. For tests.
+    RelightStepStats gradient(std::vector<float>& grads);
+    // The raw parameters: the intrinsic network, then log radiance of the environment's texels (RGB), then the
+    // log exposure of each image. For tests (finite differences).
+    std::vector<float>& raw_params() { return m_params; }
+    const IntrinsicLayout& layout() const { return m_layout; }
+    size_t environment_offset() const { return m_env_offset; }
+    size_t exposure_offset() const { return m_exposure_offset; }
+    // The averaged parameters, the environment and the exposures as the model's relight section.
+    RelightFields fields(double seconds) const;
+
+  private:
+    RelightStepStats compute_gradient();  // into m_grads, for the batch of the current step
+
+    const RelightSamples& m_samples;
+    RelightTrainSettings m_settings;
+    IntrinsicLayout m_layout;
+    size_t m_env_offset = 0, m_exposure_offset = 0, m_total = 0;
+    size_t m_images = 0;
+    std::vector<float> m_params, m_grads;
+    Adam m_adam;
+};
+
+}  // namespace npt::nerf
