@@ -221,6 +221,7 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         ro.steps = args.relight_steps;
         ro.points = args.relight_points;
         ro.quiet = global.quiet;
+        ro.backend = backend;
         interrupted = !run_relight_stage(model, data, ro, interrupts);
     }
     const auto& pt = phase_total;

@@ -8,6 +8,7 @@
 
 #include "core/progress.h"
 #include "interrupt.h"
+#include "nerf/backend/nerf_backend.h"
 #include "nerf/relight/relight_samples.h"
 #include "nerf/relight/relight_trainer.h"
 #include "nerf/trainer.h"
@@ -53,7 +54,8 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ss.directions = options.directions;
     ss.seed = model.config.training.seed;
     StageLine line(options.quiet);
-    const nerf::RelightSamples samples = nerf::gather_relight_samples(model, data, ss, [&](size_t done, size_t total) {
+    std::unique_ptr<nerf::FieldQuery> query = nerf::make_field_query(options.backend, model);
+    const nerf::RelightSamples samples = nerf::gather_relight_samples(model, data, *query, ss, [&](size_t done, size_t total) {
         line.show(fmt::format("relight: surface points {} {:3.0f}% {}/{}", format_bar(double(done) / total, 20),
                               100.0 * done / total, done, total),
                   done == total);

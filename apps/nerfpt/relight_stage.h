@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "nerf/backend/nerf_backend.h"
 #include "nerf/dataset.h"
 #include "nerf/nerf_model.h"
 
@@ -17,6 +18,7 @@ struct RelightStageOptions {
     int points = 16384;
     int directions = 64;
     bool quiet = false;
+    nerf::Backend backend = nerf::Backend::cpu;  // where the NeRF is evaluated while gathering surface points
 };
 
 // Returns false when interrupted (the model keeps whatever relight section it had before).

@@ -14,7 +14,9 @@
 #include "nerf/mlp_batch.h"
 #include "nerf/model_file.h"
 #include "nerf/relight/relight_section.h"
+#include "core/srgb.h"
 #include "nerf/relight/relight_trainer.h"
+#include "nerf/relight/wavefront_march.h"
 #include "test_support.h"
 
 namespace npt::nerf {
@@ -290,6 +292,82 @@ TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
     // what remains is the fit's own error.
     EXPECT_LT(std::sqrt(err / norm), 0.05);
     EXPECT_LT(normal_err / double(got.size()) * 57.29578, 5.0);  // degrees
+}
+
+}  // namespace
+}  // namespace npt::nerf
+
+namespace npt::nerf {
+namespace {
+
+// The wavefront marcher (rounds of samples, batched evaluation) against one ray at a time through the per-point
+// query: the same samples, the same sums, so agreement to float rounding; events where the sequential optical
+// depth first reaches the target.
+TEST(WavefrontMarch, MatchesTheSequentialMarchOfEachRay) {
+    NerfConfig cfg;
+    cfg.encoding.grid.levels = 4;
+    cfg.encoding.grid.log2_table_size = 12;
+    cfg.occupancy.resolution = 16;
+    NerfModel m = create_model(cfg, 1.0f, ngp_world_to_model(0.33f, Vec3(0.5f)));
+    Pcg32 rng(5, 6);
+    // Dense enough that some rays turn opaque (optical depth ~10 over a ray): positive features through
+    // positive density weights.
+    const NerfLayout layout = m.layout();
+    for (size_t i = layout.density_offset; i < layout.color_offset; ++i) m.params[i] = std::fabs(m.params[i]);
+    for (size_t i = layout.grid_offset; i < m.params.size(); ++i) m.params[i] = rng.next_float() * 0.55f;
+    const NerfFieldView field = m.field();
+    const MarchParams mp = m.march_params();
+    std::vector<WaveRay> rays(300);
+    for (auto& r : rays) {
+        const Vec3 o(rng.next_float() * 2.0f - 0.5f, -0.6f, rng.next_float());
+        const Vec3 target(rng.next_float(), rng.next_float(), rng.next_float());
+        r.ray = Ray{o, normalize(target - o)};
+        r.jitter = rng.next_float();
+        r.tau_target = 0.5f + 3.0f * rng.next_float();
+    }
+    std::vector<WaveRay> events = rays;
+    auto query = make_cpu_field_query(m);
+    march_wavefront(m, *query, rays, WaveMode::radiance);
+    march_wavefront(m, *query, events, WaveMode::event);
+    int opaque = 0, with_event = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        double log_t = 0, tau = 0;
+        Rgb rad(0.0f);
+        bool event = false;
+        Vec3 ev(0.0f);
+        march_ray_visit(mp, m.occupancy.view(), rays[i].ray, rays[i].jitter, [&](const MarchSample& s) {
+            float sigma;
+            Rgb c;
+            field.query(s.position, rays[i].ray.d, &sigma, &c);
+            const double d = double(sigma) * s.dt;
+            if (!event) {
+                tau += d;
+                if (tau >= events[i].tau_target) {
+                    event = true;
+                    ev = s.position;
+                }
+            }
+            if (log_t > -9.2103404) {
+                const Rgb lin(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z));
+                rad += lin * float(std::exp(log_t) * -std::expm1(-d));
+                log_t -= d;
+            }
+            return true;
+        });
+        const float t = log_t < -9.2103404 ? 0.0f : float(std::exp(log_t));
+        opaque += t == 0.0f;
+        EXPECT_NEAR(rays[i].transmittance, t, 1e-4f + 1e-3f * t) << i;
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(rays[i].radiance[c], rad[c], 1e-4f + 1e-3f * rad[c]) << i;
+        ASSERT_EQ(events[i].has_event, event) << i;
+        if (event) {
+            ++with_event;
+            EXPECT_NEAR(length(events[i].event_position - ev), 0.0f, 1e-5f) << i;
+        }
+    }
+    // Both kinds of ray are exercised.
+    EXPECT_GT(opaque, 10);
+    EXPECT_LT(opaque, 290);
+    EXPECT_GT(with_event, 10);
 }
 
 }  // namespace

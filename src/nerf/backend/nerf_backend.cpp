@@ -134,6 +134,17 @@ class GpuBakeField final : public bake::BakeField {
   private:
     cuda::CudaFieldEvaluator m_eval;
 };
+
+class GpuFieldQuery final : public FieldQuery {
+  public:
+    explicit GpuFieldQuery(const NerfModel& model) : m_eval(model, cuda::Precision::fp32) {}
+    void evaluate(const Vec3* positions, const Vec3* dirs, size_t n, float* sigma, Rgb* rgb) override {
+        m_eval.evaluate(positions, dirs, n, sigma, rgb);
+    }
+
+  private:
+    cuda::CudaFieldEvaluator m_eval;
+};
 #endif
 
 }  // namespace
@@ -174,6 +185,14 @@ std::unique_ptr<ViewRendererBackend> make_view_renderer(Backend backend, const N
     if (backend == Backend::cuda) throw Error("--backend cuda: " + cuda_unavailable_reason());
     (void)precision;
     return std::make_unique<CpuViewRenderer>(model);
+}
+
+std::unique_ptr<FieldQuery> make_field_query(Backend backend, const NerfModel& model) {
+#if NERFPT_HAVE_CUDA
+    if (backend == Backend::cuda) return std::make_unique<GpuFieldQuery>(model);
+#endif
+    if (backend == Backend::cuda) throw Error("--backend cuda: " + cuda_unavailable_reason());
+    return make_cpu_field_query(model);
 }
 
 std::unique_ptr<bake::BakeField> make_bake_field(Backend backend, const NerfModel& model) {

@@ -13,6 +13,7 @@
 #include "core/image.h"
 #include "nerf/dataset.h"
 #include "nerf/nerf_model.h"
+#include "nerf/relight/field_query.h"
 #include "nerf/render_view.h"
 #include "nerf/trainer.h"
 
@@ -64,6 +65,10 @@ class ViewRendererBackend {
 // The field evaluator a bake uses on this backend: nullptr for the CPU (bake_model's own parallel path); on the
 // GPU the fp32 per-point code, so that a GPU bake is the CPU's up to rounding. The model must outlive it.
 std::unique_ptr<bake::BakeField> make_bake_field(Backend backend, const NerfModel& model);
+
+// Batched NeRF evaluation for the relight stage's wavefront marcher: parallel CPU chunks, or the GPU's fp32
+// per-point code (the CPU's maths up to rounding). The model must outlive it.
+std::unique_ptr<FieldQuery> make_field_query(Backend backend, const NerfModel& model);
 
 // The model must outlive the renderer.
 std::unique_ptr<ViewRendererBackend> make_view_renderer(Backend backend, const NerfModel& model,

@@ -3,7 +3,8 @@
 // renderer draws its scattering events; at each point the density normal and, for a fixed set of directions over
 // its hemisphere, the transmittance toward the environment and the radiance the NeRF sends back from that
 // direction (the object's own light under the capture illumination: the indirect light). Computed once, before
-// the optimisation, on the CPU (TBB), deterministically for a seed.
+// the optimisation, with the wavefront marcher (the field evaluated by `query`: CPU or GPU), deterministically
+// for a seed.
 #pragma once
 
 #include <cstdint>
@@ -13,6 +14,7 @@
 #include "core/vec.h"
 #include "nerf/dataset.h"
 #include "nerf/nerf_model.h"
+#include "nerf/relight/field_query.h"
 
 namespace npt::nerf {
 
@@ -44,7 +46,7 @@ struct RelightSamples {
 using RelightProgressFn = std::function<void(size_t, size_t)>;
 
 // Throws npt::Error when the model sees (almost) nothing of the object: fewer than 1% of the points found.
-RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& data,
+RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& data, FieldQuery& query,
                                       const RelightSampleSettings& settings,
                                       const RelightProgressFn& progress = {});
 
