@@ -133,12 +133,18 @@ Image read_exr(const fs::path& path) {
                      ptrdiff_t(dw.min.y) * ptrdiff_t(ys);
         Imf::FrameBuffer fb;
         const char* names[3] = {"R", "G", "B"};
-        for (int c = 0; c < 3; ++c)
+        // Y: one slice (a frame buffer holds one per name) into R, copied to G and B below.
+        for (int c = 0; c < (rgb ? 3 : 1); ++c)
             fb.insert(rgb ? names[c] : "Y",
                       Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, 0.0));
         if (alpha) fb.insert("A", Imf::Slice(Imf::FLOAT, base + 3 * sizeof(float), xs, ys, 1, 1, 1.0));
         file.setFrameBuffer(fb);
         file.readPixels(dw.min.y, dw.max.y);
+        if (luma)
+            for (size_t i = 0, n = size_t(w) * size_t(h); i < n; ++i) {
+                float* px = img.pixels.data() + i * size_t(img.channels);
+                px[1] = px[2] = px[0];
+            }
         return img;
     } catch (const Error&) {
         throw;
