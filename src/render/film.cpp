@@ -33,7 +33,7 @@ uint32_t parse_aov_list(const std::string& text) {
         else if (name == "depth")
             mask |= k_aov_depth;
         else
-            throw Error("--aov '" + text + "': " + (name.empty() ? std::string("an empty name") : "'" + name + "'") +
+            throw Error("'" + text + "': " + (name.empty() ? std::string("an empty name") : "'" + name + "'") +
                         " is not an AOV (available: albedo, normal, depth, comma-separated)");
         if (comma == std::string::npos) return mask;
         begin = comma + 1;

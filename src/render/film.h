@@ -26,7 +26,8 @@ struct AovImages {
 // The layers of `mask`, allocated (zero) at width x height; the others empty.
 AovImages make_aov_images(int width, int height, uint32_t mask);
 
-// "albedo,normal,depth" or any subset in any order -> a mask. Throws npt::Error naming the bad value.
+// "albedo,normal,depth" or any subset in any order -> a mask. Throws npt::Error naming the bad value (the
+// command line puts "--aov: " in front).
 uint32_t parse_aov_list(const std::string& text);
 
 // An EXR layer: channels "<layer>.<channel>" in the order of the image's channels.

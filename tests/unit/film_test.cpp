@@ -50,9 +50,9 @@ TEST(Film, AovListsParseAndBadNamesAreNamed) {
     EXPECT_EQ(parse_aov_list("albedo"), uint32_t(k_aov_albedo));
     EXPECT_EQ(parse_aov_list("depth,albedo"), uint32_t(k_aov_albedo | k_aov_depth));
     EXPECT_EQ(parse_aov_list("albedo,normal,depth"), uint32_t(k_aov_albedo | k_aov_normal | k_aov_depth));
-    test::expect_error_message([] { parse_aov_list("albedo,normals"); }, {"--aov", "'normals'", "albedo, normal, depth"});
-    test::expect_error_message([] { parse_aov_list(""); }, {"--aov", "empty"});
-    test::expect_error_message([] { parse_aov_list("albedo,"); }, {"--aov", "empty"});
+    test::expect_error_message([] { parse_aov_list("albedo,normals"); }, {"'normals'", "albedo, normal, depth"});
+    test::expect_error_message([] { parse_aov_list(""); }, {"empty"});
+    test::expect_error_message([] { parse_aov_list("albedo,"); }, {"'albedo,'", "empty"});
     test::expect_error_message([] { parse_aov_list("Albedo"); }, {"'Albedo'"});
 }
 
