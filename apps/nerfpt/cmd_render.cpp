@@ -99,6 +99,28 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
            "PNG only: multiply by 2^STOPS before the sRGB curve and clamp, -20..20 (default: 0); the "
            "EXR is always unscaled")
         ->check(CLI::Range(-20.0f, 20.0f));
+    cmd->add_flag("--transparent", args.transparent,
+                  "Film > Transparent: the background is not rendered (the environment still lights the scene); "
+                  "OUT.exr is RGBA with premultiplied RGB and alpha = coverage, OUT.png RGBA (default: the "
+                  "scene's \"transparent\", else off)");
+    CLI::Option* aov =
+        cmd->add_option("--aov", args.aovs,
+                        "Extra layers in OUT.exr, comma-separated, any of albedo (albedo.R/G/B), normal (world "
+                        "space, normal.X/Y/Z), depth (distance along the ray, depth.Z; +inf where nothing was hit)")
+            ->check(CLI::Validator(
+                [](std::string& text) {
+                    try {
+                        render::parse_aov_list(text);
+                    } catch (const Error& e) {
+                        return std::string(e.what());
+                    }
+                    return std::string();
+                },
+                "LIST"));
+    cmd->add_flag("--aov-files", args.aov_files,
+                  "Also write each --aov layer as its own EXR beside OUT: OUT.albedo.exr and OUT.normal.exr "
+                  "(R, G, B), OUT.depth.exr (Y)")
+        ->needs(aov);
     cmd->add_flag("--denoise", args.denoise,
                   "OptiX backend: run OptiX's AI denoiser (albedo and normal guides); OUT.exr and OUT.png are the "
                   "denoised image, OUT.noisy.exr the render as it came out");
@@ -142,6 +164,47 @@ std::vector<InputFile> scene_inputs(const scene::Scene& scene) {
     return in;
 }
 
+// --aov-files: one plain EXR per AOV beside OUT (OUT.albedo.exr, ...), channels that any EXR reader takes as an
+// image (OpenCV reads only R, G, B, A or Y).
+struct AovFile {
+    render::AovBits aov;
+    fs::path path;
+};
+std::vector<AovFile> aov_file_paths(const fs::path& out_exr, uint32_t mask) {
+    std::vector<AovFile> files;
+    for (render::AovBits aov : {render::k_aov_albedo, render::k_aov_normal, render::k_aov_depth})
+        if (mask & aov) {
+            fs::path p = out_exr;
+            p.replace_extension(std::string(".") + render::aov_exr_names(aov).layer + ".exr");
+            files.push_back({aov, p});
+        }
+    return files;
+}
+
+const Image& aov_image(const render::AovImages& aovs, render::AovBits aov) {
+    return aov == render::k_aov_albedo ? aovs.albedo : aov == render::k_aov_normal ? aovs.normal : aovs.depth;
+}
+
+void write_aov_file(const AovFile& f, const render::AovImages& aovs) {
+    const Image& image = aov_image(aovs, f.aov);
+    write_exr_channels(f.path, image,
+                       image.channels == 1 ? std::vector<std::string>{"Y"} : std::vector<std::string>{"R", "G", "B"});
+}
+
+// The AOVs as layers of OUT.exr: albedo.R, normal.X, depth.Z, ... (render/film.h).
+std::vector<ExrLayer> aov_layers(const render::AovImages& aovs, uint32_t mask) {
+    std::vector<ExrLayer> layers;
+    for (render::AovBits aov : {render::k_aov_albedo, render::k_aov_normal, render::k_aov_depth})
+        if (mask & aov) {
+            const render::ExrLayerNames n = render::aov_exr_names(aov);
+            ExrLayer l;
+            for (const std::string& c : n.channels) l.names.push_back(std::string(n.layer) + "." + c);
+            l.image = &aov_image(aovs, aov);
+            layers.push_back(std::move(l));
+        }
+    return layers;
+}
+
 }  // namespace
 
 int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
@@ -159,12 +222,16 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     fs::path out_noisy = out_exr;  // --denoise: the render as it came out
     out_noisy.replace_extension(".noisy.exr");
     check_output(out_exr);
+    const uint32_t aov_mask = args.aovs.empty() ? 0u : render::parse_aov_list(args.aovs);
+    const std::vector<AovFile> aov_files = args.aov_files ? aov_file_paths(out_exr, aov_mask) : std::vector<AovFile>{};
 
     render::RenderOptions options;
     if (!args.res.empty()) parse_resolution(args.res, &options.width, &options.height);
     options.spp = args.spp;
     options.max_depth = args.max_depth;
     options.threads = args.threads;
+    options.transparent = args.transparent;
+    options.aovs = aov_mask;
 
     const auto t_load = std::chrono::steady_clock::now();
     scene::LoadOptions load;
@@ -172,6 +239,7 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     const scene::Scene scene = scene::load_scene(args.scene, load);
     for (const fs::path& out : {out_exr, out_png, out_noisy})
         if (out != out_noisy || args.denoise) refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
+    for (const AovFile& f : aov_files) refuse_overwriting_inputs(f.path, "--aov-files", scene_inputs(scene));
     options.seed = args.seed_given ? args.seed : scene.settings.seed;
     // Chosen once the input is known to be good: the CPU fallback's note never precedes an input error.
     std::string note;
@@ -181,34 +249,37 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     spdlog::debug("loaded {} in {:.2f} s: {} meshes, {} triangles", args.scene,
                   std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count(),
                   scene.meshes.size(), scene.triangle_count());
-    spdlog::info("rendering {}x{}, {} spp, max depth {}, seed {}, backend {}", resolved.width,
-                 resolved.height, resolved.spp, resolved.max_depth, resolved.seed, resolved.backend);
+    spdlog::info("rendering {}x{}, {} spp, max depth {}, seed {}, backend {}{}{}", resolved.width,
+                 resolved.height, resolved.spp, resolved.max_depth, resolved.seed, resolved.backend,
+                 resolved.transparent ? ", transparent" : "", args.aovs.empty() ? "" : ", AOVs " + args.aovs);
 
     ProgressSettings ps;
     ps.style = progress_style(stream_is_tty(stderr), global.quiet);
     Progress progress(ps, std::cerr);
     const auto t0 = std::chrono::steady_clock::now();
     Image denoised;
+    render::AovImages aovs;
     const Image image = render::render_with_backend(
         scene, resolved, [&progress](uint64_t done, uint64_t total) { progress.update(done, total); },
-        args.denoise ? &denoised : nullptr);
+        args.denoise ? &denoised : nullptr, &aovs);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     progress.finish();
 
     {
         auto no_interrupt = interrupts.hold();  // every file complete, or an interrupt waits for them
-        if (args.denoise) {
-            write_exr(out_noisy, image);
-            write_exr(out_exr, denoised);
-            write_png(out_png, denoised, args.exposure);
-        } else {
-            write_exr(out_exr, image);
-            write_png(out_png, image, args.exposure);
-        }
+        if (args.denoise) write_exr_layers(out_noisy, image, {});
+        const Image& shown = args.denoise ? denoised : image;
+        write_exr_layers(out_exr, shown, aov_layers(aovs, aov_mask));
+        if (shown.channels == 4)
+            write_png_premultiplied(out_png, shown, args.exposure);
+        else
+            write_png(out_png, shown, args.exposure);
+        for (const AovFile& f : aov_files) write_aov_file(f, aovs);
     }
     const double samples = double(resolved.width) * resolved.height * resolved.spp;
     if (args.denoise) fmt::print("wrote {} (denoised) and {} (as rendered)\n", out_exr.string(), out_noisy.string());
     fmt::print("wrote {}\nwrote {}\n", out_exr.string(), out_png.string());
+    for (const AovFile& f : aov_files) fmt::print("wrote {}\n", f.path.string());
     fmt::print("rendered {}x{} at {} spp in {} ({} samples/s)\n", resolved.width, resolved.height,
                resolved.spp, format_seconds(seconds), format_count(seconds > 0 ? samples / seconds : 0.0));
     return 0;

@@ -22,6 +22,9 @@ struct RenderArgs {
     std::string camera;
     float exposure = 0.0f;
     bool denoise = false;  // OptiX's denoiser: OUT.exr denoised, OUT.noisy.exr as rendered
+    bool transparent = false;  // Film > Transparent: RGBA without the background (or the scene's setting)
+    std::string aovs;          // "albedo,normal,depth" or a subset: layers of OUT.exr (render/film.h)
+    bool aov_files = false;    // each AOV also as its own EXR beside OUT: OUT.albedo.exr, ...
 };
 
 // Parses "640x480" strictly: digits only, each side in 1..render::k_max_resolution. Throws npt::Error.

@@ -133,12 +133,18 @@ Image read_exr(const fs::path& path) {
                      ptrdiff_t(dw.min.y) * ptrdiff_t(ys);
         Imf::FrameBuffer fb;
         const char* names[3] = {"R", "G", "B"};
-        for (int c = 0; c < 3; ++c)
+        // Y: one slice (a frame buffer holds one per name) into R, copied to G and B below.
+        for (int c = 0; c < (rgb ? 3 : 1); ++c)
             fb.insert(rgb ? names[c] : "Y",
                       Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys, 1, 1, 0.0));
         if (alpha) fb.insert("A", Imf::Slice(Imf::FLOAT, base + 3 * sizeof(float), xs, ys, 1, 1, 1.0));
         file.setFrameBuffer(fb);
         file.readPixels(dw.min.y, dw.max.y);
+        if (luma)
+            for (size_t i = 0, n = size_t(w) * size_t(h); i < n; ++i) {
+                float* px = img.pixels.data() + i * size_t(img.channels);
+                px[1] = px[2] = px[0];
+            }
         return img;
     } catch (const Error&) {
         throw;
@@ -216,20 +222,43 @@ ImageSize read_image_size(const fs::path& path) {
     return {w, h};
 }
 
-void write_exr(const fs::path& path, const Image& image) {
-    check_writable(path, image);
+namespace {
+
+// Channel c of `image` is written as names[c] (a name per channel).
+void add_exr_channels(Imf::Header& header, Imf::FrameBuffer& fb, const Image& image,
+                      const std::vector<std::string>& names) {
+    const size_t xs = sizeof(float) * size_t(image.channels), ys = xs * size_t(image.width);
+    // OpenEXR's Slice takes a non-const pointer even for writing; it only reads through it.
+    char* base = const_cast<char*>(reinterpret_cast<const char*>(image.pixels.data()));
+    for (size_t c = 0; c < names.size(); ++c) {
+        header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
+        fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
+    }
+}
+
+}  // namespace
+
+void write_exr_channels(const fs::path& path, const Image& image, const std::vector<std::string>& names,
+                        const std::vector<ExrLayer>& layers) {
+    check_size(image.width, image.height, path.string());
+    if (names.empty() || size_t(image.channels) < names.size() ||
+        image.pixels.size() != size_t(image.width) * size_t(image.height) * size_t(image.channels))
+        throw Error(path.string() + ": " + std::to_string(image.channels) + " channels, " +
+                    std::to_string(names.size()) + " channel names (or a buffer of the wrong size)");
+    for (const ExrLayer& l : layers) {
+        const std::string what = path.string() + ": layer " + (l.names.empty() ? "''" : "'" + l.names[0] + "'");
+        if (!l.image || l.names.empty() || l.image->channels != int(l.names.size()) ||
+            l.image->width != image.width || l.image->height != image.height ||
+            l.image->pixels.size() != size_t(image.width) * size_t(image.height) * l.names.size())
+            throw Error(what + " does not match the image (size or channel names)");
+    }
     const fs::path tmp = temp_sibling(path);
     try {
         Imf::Header header(image.width, image.height);
         header.compression() = Imf::ZIP_COMPRESSION;
-        for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
         Imf::FrameBuffer fb;
-        const size_t xs = sizeof(float) * size_t(image.channels), ys = xs * size_t(image.width);
-        // OpenEXR's Slice takes a non-const pointer even for writing; it only reads through it.
-        char* base = const_cast<char*>(reinterpret_cast<const char*>(image.pixels.data()));
-        const char* names[3] = {"R", "G", "B"};
-        for (int c = 0; c < 3; ++c)
-            fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), xs, ys));
+        add_exr_channels(header, fb, image, names);
+        for (const ExrLayer& l : layers) add_exr_channels(header, fb, *l.image, l.names);
         {
             Imf::OutputFile out(tmp.string().c_str(), header);
             out.setFrameBuffer(fb);
@@ -245,24 +274,62 @@ void write_exr(const fs::path& path, const Image& image) {
     commit_temp(tmp, path);
 }
 
-void write_png(const fs::path& path, const Image& image, float exposure_stops) {
+namespace {
+
+unsigned char srgb_byte(float linear) {
+    const float v = std::isfinite(linear) ? std::clamp(linear_to_srgb(std::max(linear, 0.0f)), 0.0f, 1.0f)
+                                          : (linear > 0 ? 1.0f : 0.0f);
+    return static_cast<unsigned char>(std::lround(v * 255.0f));
+}
+
+// out_channels 3: RGB, alpha dropped; 4: RGBA from premultiplied RGBA, straight alpha.
+void write_png_channels(const fs::path& path, const Image& image, float exposure_stops, int out_channels) {
     check_writable(path, image);
+    if (out_channels == 4 && image.channels != 4)
+        throw Error(path.string() + ": an RGBA PNG needs a 4-channel image");
     const float scale = std::exp2(exposure_stops);
-    std::vector<unsigned char> rgb(size_t(image.width) * size_t(image.height) * 3);
-    for (size_t i = 0, n = size_t(image.width) * size_t(image.height); i < n; ++i)
-        for (size_t c = 0; c < 3; ++c) {
-            float v = image.pixels[i * size_t(image.channels) + c] * scale;
-            v = std::isfinite(v) ? std::clamp(linear_to_srgb(std::max(v, 0.0f)), 0.0f, 1.0f)
-                                 : (v > 0 ? 1.0f : 0.0f);
-            rgb[i * 3 + c] = static_cast<unsigned char>(std::lround(v * 255.0f));
+    const size_t oc = size_t(out_channels), ic = size_t(image.channels);
+    std::vector<unsigned char> out(size_t(image.width) * size_t(image.height) * oc);
+    for (size_t i = 0, n = size_t(image.width) * size_t(image.height); i < n; ++i) {
+        const float* px = &image.pixels[i * ic];
+        float straight = 1.0f;
+        if (oc == 4) {
+            const float a = std::isfinite(px[3]) ? std::clamp(px[3], 0.0f, 1.0f) : 0.0f;
+            out[i * oc + 3] = static_cast<unsigned char>(std::lround(a * 255.0f));
+            straight = a > 0.0f ? 1.0f / a : 0.0f;
         }
+        for (size_t c = 0; c < 3; ++c) out[i * oc + c] = srgb_byte(px[c] * straight * scale);
+    }
     const fs::path tmp = temp_sibling(path);
-    if (!stbi_write_png(tmp.string().c_str(), image.width, image.height, 3, rgb.data(), image.width * 3)) {
+    if (!stbi_write_png(tmp.string().c_str(), image.width, image.height, out_channels, out.data(),
+                        image.width * out_channels)) {
         std::error_code ec;
         fs::remove(tmp, ec);
         throw Error(path.string() + ": cannot write PNG (is the folder writable?)");
     }
     commit_temp(tmp, path);
+}
+
+}  // namespace
+
+void write_exr(const fs::path& path, const Image& image) {
+    check_writable(path, image);
+    write_exr_channels(path, image, {"R", "G", "B"});  // alpha, if any, dropped
+}
+
+void write_exr_layers(const fs::path& path, const Image& image, const std::vector<ExrLayer>& layers) {
+    check_writable(path, image);
+    const std::vector<std::string> names = image.channels == 4 ? std::vector<std::string>{"R", "G", "B", "A"}
+                                                               : std::vector<std::string>{"R", "G", "B"};
+    write_exr_channels(path, image, names, layers);
+}
+
+void write_png(const fs::path& path, const Image& image, float exposure_stops) {
+    write_png_channels(path, image, exposure_stops, 3);
+}
+
+void write_png_premultiplied(const fs::path& path, const Image& rgba, float exposure_stops) {
+    write_png_channels(path, rgba, exposure_stops, 4);
 }
 
 }  // namespace npt

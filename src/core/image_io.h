@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "core/image.h"
 #include "core/srgb.h"
@@ -33,7 +34,27 @@ Image decode_image(const unsigned char* data, size_t size, const std::string& na
 // float32 RGB (alpha dropped), scene-linear, ZIP compression (lossless).
 void write_exr(const std::filesystem::path& path, const Image& image);
 
+// Another layer of an EXR file: channel names[c] holds channel c of *image (the main image's size), e.g.
+// {"normal.X", "normal.Y", "normal.Z"}.
+struct ExrLayer {
+    std::vector<std::string> names;
+    const Image* image = nullptr;
+};
+
+// float32, ZIP: channel c of `image` as names[c] for the first names.size() channels (the rest left out), then
+// every layer's channels. Throws npt::Error naming the file and, for a bad layer, its first channel.
+void write_exr_channels(const std::filesystem::path& path, const Image& image, const std::vector<std::string>& names,
+                        const std::vector<ExrLayer>& layers = {});
+
+// float32, ZIP: R, G, B and, for a 4-channel image, A (written as it is: premultiplied if the image is), then
+// every layer's channels. Throws npt::Error naming the file and, for a bad layer, its first channel.
+void write_exr_layers(const std::filesystem::path& path, const Image& image, const std::vector<ExrLayer>& layers);
+
 // 8-bit sRGB: value x 2^exposure_stops, sRGB OETF, clamped to [0, 1]; alpha dropped.
 void write_png(const std::filesystem::path& path, const Image& image, float exposure_stops = 0.0f);
+
+// The same for premultiplied RGBA (4 channels): an RGBA PNG with straight alpha (PNG's), the colour divided by
+// alpha before the exposure and the sRGB curve; alpha 0 stores black.
+void write_png_premultiplied(const std::filesystem::path& path, const Image& rgba, float exposure_stops = 0.0f);
 
 }  // namespace npt

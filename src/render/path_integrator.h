@@ -10,6 +10,7 @@
 #include "lights/light.h"
 #include "materials/bsdf.h"
 #include "media/volume_integrator.h"
+#include "render/first_hit.h"
 #include "render/ray_offset.h"
 #include "render/surface.h"
 
@@ -23,6 +24,9 @@ struct PathSettings {
     LightStrategy strategy = LightStrategy::Mis;
     int max_depth = 16;      // the most scattering events on a path; emission after the last one still counts
     int rr_start_depth = 3;  // Russian roulette starts after this many bounces
+    // Film > Transparent: what a camera ray sees of the environment directly is left out (the film's alpha,
+    // FirstHit::escaped, says how much of it there was); light the environment sends via surfaces stays.
+    bool transparent_background = false;
 };
 
 // Spawns a ray leaving `si` in direction `wi` from the correct side of the surface.
@@ -70,16 +74,19 @@ NPT_HD NPT_INLINE bool path_add_volume(PathState& st, const media::VolumeResult&
 // Everything a path does at the end of `ray` after the volumes in front of it: the environment when nothing
 // was hit, emission, next-event estimation (one light sample, weighted against the BSDF strategy; an unblocked
 // one becomes *shadow), the BSDF sample and Russian roulette. True: the path goes on along *next.
+// At the camera ray's vertex (depth 0) it also fills *first, when given, for the film (render/first_hit.h).
 // Not inlined on the GPU: the per-thread OptiX program's path loop around a call measured faster on cornell than
 // with the body inlined (296 -> 299 M samples/s at 96 registers, 300 -> 305 at 128; docs/benchmarks.md).
 template <class Tracer, class Sampler>
 NPT_HD NPT_DEVICE_NOINLINE bool path_scatter(const SceneView& sv, const Tracer& tracer, PathState& st, const Ray& ray, bool found,
                          const Hit& hit, Sampler& sampler, const PathSettings& ps, ShadowRequest* shadow,
-                         Ray* next) {
+                         Ray* next, FirstHit* first = nullptr) {
     shadow->pending = false;
     if (!found) {
         const lights::LightSetView& ls = sv.lights;
-        if (ls.environment_light >= 0) {
+        const bool camera_ray = st.depth == 0;
+        if (camera_ray && first) first->escaped = camera_transmittance(st.throughput);
+        if (ls.environment_light >= 0 && !(camera_ray && ps.transparent_background)) {
             Rgb le = lights::environment_radiance(ls.environment, ray.d);
             float w = 1.0f;
             if (!st.specular_bounce && ps.strategy == LightStrategy::LightOnly)
@@ -92,6 +99,8 @@ NPT_HD NPT_DEVICE_NOINLINE bool path_scatter(const SceneView& sv, const Tracer& 
     }
 
     SurfaceInteraction si = make_surface_interaction(sv, hit, ray);
+    if (st.depth == 0 && first)
+        record_first_event(first, camera_transmittance(st.throughput), si.bsdf.base_color, si.shading.n, hit.t);
     Vec3 wo_world = -ray.d;
     if (!is_black(si.emission)) {
         float w = 1.0f;
@@ -164,12 +173,14 @@ NPT_HD NPT_DEVICE_NOINLINE bool path_scatter(const SceneView& sv, const Tracer& 
 }
 
 // Radiance arriving at the ray origin along `ray`. `sampler` gives this pixel-sample's random numbers, one
-// dimension per decision in a fixed order (so low-discrepancy samplers stratify each decision).
+// dimension per decision in a fixed order (so low-discrepancy samplers stratify each decision). `first`,
+// when given, receives what the camera ray met first (render/first_hit.h); it does not change the radiance.
 template <class Tracer, class Sampler>
 NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sampler& sampler,
-                      const PathSettings& ps) {
+                      const PathSettings& ps, FirstHit* first = nullptr) {
     PathState st;
     st.prev_p = ray.o;
+    if (first) *first = FirstHit{};
     for (;;) {
         Hit hit;
         bool found = tracer.intersect(ray, INFINITY, &hit);
@@ -181,7 +192,7 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
             break;
         ShadowRequest shadow;
         Ray next;
-        const bool more = path_scatter(sv, tracer, st, ray, found, hit, sampler, ps, &shadow, &next);
+        const bool more = path_scatter(sv, tracer, st, ray, found, hit, sampler, ps, &shadow, &next, first);
         if (shadow.pending) {
             const float t = sv.volumes.size > 0 ? media::integrate_volumes(sv.volumes, shadow.ray, 0.0f, shadow.tmax,
                                                                            shadow.xi, true)

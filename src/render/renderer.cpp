@@ -15,6 +15,7 @@ RenderOptions resolve_options(const scene::Scene& scene, const RenderOptions& op
     }
     if (r.spp == 0) r.spp = scene.settings.spp;
     if (r.max_depth < 0) r.max_depth = scene.settings.max_depth;
+    r.transparent = r.transparent || scene.settings.transparent;
 
     auto in_range = [](long v, long lo, long hi) { return v >= lo && v <= hi; };
     if (!in_range(r.width, 1, k_max_resolution) || !in_range(r.height, 1, k_max_resolution))
@@ -31,16 +32,19 @@ RenderOptions resolve_options(const scene::Scene& scene, const RenderOptions& op
                     std::to_string(k_max_depth) + ")");
     if (r.threads < 0 || r.threads > 4096)
         throw Error("--threads: " + std::to_string(r.threads) + " is out of range");
+    if (r.aovs & ~uint32_t(k_aov_albedo | k_aov_normal | k_aov_depth))
+        throw Error("--aov: unknown AOV bits " + std::to_string(r.aovs));
     if (r.backend != "cpu" && r.backend != "optix")
         throw Error("--backend: unknown backend '" + r.backend + "' (available: cpu, optix)");
     return r;
 }
 
-Image render(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress) {
+Image render(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress,
+             AovImages* aovs) {
     // The OptiX backend lives in a separate library: render/backend/render_backend.h dispatches to it.
     if (resolved.backend != "cpu")
         throw Error("render: backend '" + resolved.backend + "' is not the CPU's (use render_with_backend)");
-    return cpu::render_cpu(scene, resolved, progress);
+    return cpu::render_cpu(scene, resolved, progress, aovs);
 }
 
 }  // namespace npt::render

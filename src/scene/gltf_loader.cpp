@@ -354,6 +354,11 @@ void apply_extras(const Context& ctx, const tinygltf::Value& extras, Scene& scen
     get_int("height", scene.settings.height, 1);
     get_int("spp", scene.settings.spp, 1);
     get_int("max_depth", scene.settings.max_depth, 0);
+    if (extras.Has("transparent")) {
+        const auto& t = extras.Get("transparent");
+        if (!t.IsBool()) throw Error(ctx.file + ": scene extras.transparent: expected true or false");
+        scene.settings.transparent = t.Get<bool>();
+    }
     if (extras.Has("background")) {
         const auto& b = extras.Get("background");
         bool ok = b.IsArray() && b.ArrayLen() == 3;

@@ -227,7 +227,7 @@ void read_environment(const Reader& r, const json& e, const fs::path& dir, Scene
 
 void read_render(const Reader& r, const json& j, RenderSettings& s) {
     if (!j.is_object()) r.fail("render", "expected an object");
-    r.check_keys(j, "render", {"width", "height", "spp", "max_depth", "seed"});
+    r.check_keys(j, "render", {"width", "height", "spp", "max_depth", "seed", "transparent"});
     if (j.contains("width")) s.width = r.integer(j["width"], "render.width", 1, k_max_image_side);
     if (j.contains("height")) s.height = r.integer(j["height"], "render.height", 1, k_max_image_side);
     if (j.contains("spp")) s.spp = r.integer(j["spp"], "render.spp", 1, 1 << 24);
@@ -235,6 +235,10 @@ void read_render(const Reader& r, const json& j, RenderSettings& s) {
     if (j.contains("seed")) {
         if (!j["seed"].is_number_unsigned()) r.fail("render.seed", "expected a non-negative integer");
         s.seed = j["seed"].get<uint64_t>();
+    }
+    if (j.contains("transparent")) {
+        if (!j["transparent"].is_boolean()) r.fail("render.transparent", "expected true or false");
+        s.transparent = j["transparent"].get<bool>();
     }
 }
 

@@ -104,6 +104,7 @@ struct RenderSettings {
     int spp = 64;
     int max_depth = 16;
     uint64_t seed = 0;
+    bool transparent = false;  // Film > Transparent: RGBA without the background (`nerfpt render --transparent`)
 };
 
 struct Scene {

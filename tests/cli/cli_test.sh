@@ -38,7 +38,8 @@ for opt in --version --verbose --quiet render info train eval view bake import-n
 done
 run render --help
 [[ $rc -eq 0 ]] || fail "render --help: exit code $rc"
-for opt in SCENE --output --spp --res --max-depth --seed --threads --backend --camera --exposure; do
+for opt in SCENE --output --spp --res --max-depth --seed --threads --backend --camera --exposure --transparent --aov \
+    --aov-files; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt render --help does not mention $opt"
 done
 run info --help
@@ -76,6 +77,11 @@ expect_error 2 "--res" render "$scene" -o "$tmp/a.exr" --res abc
 expect_error 2 "--res" render "$scene" -o "$tmp/a.exr" --res 100000x10
 expect_error 2 "--res" render "$scene" -o "$tmp/a.exr" --res -5x10
 expect_error 2 "--res" render "$scene" -o "$tmp/a.exr" --res 64x
+# --aov: names the bad value; --aov-files needs --aov; the output folder must exist with AOVs too.
+expect_error 2 "--aov: 'albedo,nrm': 'nrm' is not an AOV" render "$scene" -o "$tmp/a.exr" --aov albedo,nrm
+expect_error 2 "--aov: '': an empty name" render "$scene" -o "$tmp/a.exr" --aov ""
+expect_error 2 "--aov-files requires --aov" render "$scene" -o "$tmp/a.exr" --aov-files
+expect_error 1 "folder '.*/no_such_dir' does not exist" render "$scene" -o "$tmp/no_such_dir/a.exr" --aov depth --aov-files
 expect_error 2 "--spp" render "$scene" -o "$tmp/a.exr" --spp 0
 expect_error 2 "--max-depth" render "$scene" -o "$tmp/a.exr" --max-depth -3
 expect_error 2 "unknown backend 'vulkan'" render "$scene" -o "$tmp/a.exr" --backend vulkan
@@ -136,6 +142,14 @@ run -q render "$scene" -o "$tmp/small.exr" --res 16x12 --spp 1 --threads 1
 [[ -s "$tmp/small.exr" && -s "$tmp/small.png" ]] || fail "tiny render: small.exr / small.png not written"
 grep -q "16x12" "$tmp/out" || fail "tiny render: summary does not name the resolution: $(cat "$tmp/out")"
 [[ ! -s "$tmp/err" ]] || fail "tiny render with -q wrote to stderr: $(cat "$tmp/err")"
+# The same with a transparent film and every AOV, the AOVs also as files beside it.
+run -q render "$scene" -o "$tmp/film.exr" --res 16x12 --spp 1 --threads 1 --backend cpu --transparent \
+    --aov albedo,normal,depth --aov-files
+[[ $rc -eq 0 ]] || fail "render --transparent --aov: exit code $rc: $(cat "$tmp/err")"
+for f in film.exr film.png film.albedo.exr film.normal.exr film.depth.exr; do
+    [[ -s "$tmp/$f" ]] || fail "render --transparent --aov --aov-files: $f not written"
+    grep -q "$f" "$tmp/out" || fail "render --aov-files: the summary does not name $f"
+done
 
 # info describes the example scene.
 run info "$scene"

@@ -67,6 +67,44 @@ TEST(ImageIo, ExrRoundTripIsBitExact) {
     EXPECT_EQ(file_count(dir), 1u);
 }
 
+// RGBA with named layers (nerfpt render --transparent --aov): read_image takes R, G, B, A back exactly; a one-channel
+// Y file (OUT.depth.exr) reads as grey; a layer that does not fit the image is an error naming it.
+TEST(ImageIo, ExrLayersAlphaAndLumaRoundTrip) {
+    const fs::path dir = test::temp_dir();
+    Image rgba(3, 2, 4), layer(3, 2, 3), depth(3, 2, 1);
+    for (size_t i = 0; i < rgba.pixels.size(); ++i) rgba.pixels[i] = 0.1f * float(i);
+    for (size_t i = 0; i < layer.pixels.size(); ++i) layer.pixels[i] = -float(i);
+    for (size_t i = 0; i < depth.pixels.size(); ++i) depth.pixels[i] = 2.0f + float(i);
+    write_exr_layers(dir / "l.exr", rgba, {{{"normal.X", "normal.Y", "normal.Z"}, &layer}, {{"depth.Z"}, &depth}});
+    const Image back = read_image(dir / "l.exr");
+    ASSERT_EQ(back.channels, 4);
+    EXPECT_EQ(back.pixels, rgba.pixels);
+    write_exr_channels(dir / "y.exr", depth, {"Y"});
+    const Image grey = read_image(dir / "y.exr");
+    ASSERT_EQ(grey.channels, 3);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(grey.at(2, 1)[c], depth.at(2, 1)[0]);
+    const Image small(2, 2, 3);
+    test::expect_error_message([&] { write_exr_layers(dir / "bad.exr", rgba, {{{"albedo.R", "albedo.G", "albedo.B"}, &small}}); },
+                               {"bad.exr", "albedo.R"});
+    EXPECT_FALSE(fs::exists(dir / "bad.exr"));
+}
+
+// Premultiplied RGBA to an RGBA PNG: the colour divided by alpha (straight, as PNG stores it), alpha kept.
+TEST(ImageIo, PngFromPremultipliedAlphaIsStraight) {
+    const fs::path dir = test::temp_dir();
+    Image rgba(2, 1, 4);
+    const float px[8] = {0.1f, 0.2f, 0.05f, 0.5f, 0.0f, 0.0f, 0.0f, 0.0f};
+    std::copy(px, px + 8, rgba.pixels.begin());
+    write_png_premultiplied(dir / "a.png", rgba);
+    const Image back = read_image(dir / "a.png");  // sRGB-decoded
+    ASSERT_EQ(back.channels, 4);
+    EXPECT_NEAR(back.at(0, 0)[0], 0.2f, 0.01f);
+    EXPECT_NEAR(back.at(0, 0)[1], 0.4f, 0.01f);
+    EXPECT_NEAR(back.at(0, 0)[3], 0.5f, 1.0f / 255.0f);
+    EXPECT_EQ(back.at(1, 0)[3], 0.0f);
+    EXPECT_EQ(back.at(1, 0)[0], 0.0f);
+}
+
 TEST(ImageIo, PngGradientRoundTripWithinQuantisation) {
     const fs::path dir = test::temp_dir();
     Image img(256, 2, 3);

@@ -51,9 +51,10 @@ namespace {
 class CpuSceneRenderer final : public SceneRenderer {
   public:
     explicit CpuSceneRenderer(const scene::Scene& scene) : m_scene(scene) {}
-    Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised) override {
+    Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised,
+                 AovImages* aovs) override {
         if (denoised) throw Error("--denoise: the denoiser is OptiX's and needs --backend optix");
-        return render::render(m_scene, resolved, progress);
+        return render::render(m_scene, resolved, progress, aovs);
     }
 
   private:
@@ -65,8 +66,9 @@ class OptixSceneRenderer final : public SceneRenderer {
   public:
     OptixSceneRenderer(const scene::Scene& scene, const RenderOptions& resolved)
         : m_renderer(scene, resolved.width, resolved.height) {}
-    Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised) override {
-        return m_renderer.render(resolved, progress, denoised);
+    Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised,
+                 AovImages* aovs) override {
+        return m_renderer.render(resolved, progress, denoised, aovs);
     }
     const Image& render_frame(const RenderOptions& resolved) override { return m_renderer.render_frame(resolved); }
 
@@ -86,8 +88,8 @@ std::unique_ptr<SceneRenderer> prepare_renderer(const scene::Scene& scene, const
 }
 
 Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress,
-                          Image* denoised) {
-    return prepare_renderer(scene, resolved)->render(resolved, progress, denoised);
+                          Image* denoised, AovImages* aovs) {
+    return prepare_renderer(scene, resolved)->render(resolved, progress, denoised, aovs);
 }
 
 }  // namespace npt::render

@@ -24,7 +24,7 @@ class SceneRenderer {
     virtual ~SceneRenderer() = default;
     // Renders `resolved` (its width and height must be the prepared ones); see render_with_backend.
     virtual Image render(const RenderOptions& resolved, const ProgressFn& progress = {},
-                         Image* denoised = nullptr) = 0;
+                         Image* denoised = nullptr, AovImages* aovs = nullptr) = 0;
     // The same render into a frame the renderer keeps (a viewer's or an animation's frames): OptiX downloads into
     // page-locked memory it reuses instead of a new image. The reference holds until the next call.
     virtual const Image& render_frame(const RenderOptions& resolved) {
@@ -37,9 +37,10 @@ class SceneRenderer {
 };
 std::unique_ptr<SceneRenderer> prepare_renderer(const scene::Scene& scene, const RenderOptions& resolved);
 
-// Renders with resolved.backend ("cpu" or "optix"). With `denoised` (OptiX only: npt::Error otherwise), the
-// denoiser's image goes there and the noisy one is returned.
+// Renders with resolved.backend ("cpu" or "optix"): RGB, or RGBA with resolved.transparent (render::render).
+// With `denoised` (OptiX only: npt::Error otherwise), the denoiser's image goes there and the noisy one is
+// returned. With `aovs`, the layers of resolved.aovs go there (render/film.h).
 Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress = {},
-                          Image* denoised = nullptr);
+                          Image* denoised = nullptr, AovImages* aovs = nullptr);
 
 }  // namespace npt::render

@@ -21,7 +21,8 @@ namespace {
 constexpr int k_tile = 16;
 }
 
-Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const ProgressFn& progress) {
+Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const ProgressFn& progress,
+                 AovImages* aovs) {
     const int width = options.width, height = options.height, spp = options.spp;
     SceneData data(scene, width, height);
     EmbreeScene embree(scene);
@@ -29,10 +30,18 @@ Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const 
     const SceneView& sv = data.view();
     PathSettings ps;
     ps.max_depth = options.max_depth;
+    ps.transparent_background = options.transparent;
+    const int channels = options.transparent ? 4 : 3;
+    const uint32_t aov_mask = aovs ? options.aovs : 0u;
+    // The camera ray's first hit is recorded only where the film needs it.
+    const bool record_first = options.transparent || aov_mask != 0;
 
     Image image = with_memory_context(
         "--res " + std::to_string(width) + "x" + std::to_string(height) + ": the image",
-        double(width) * double(height) * 3.0 * 4.0, "lower --res", [&] { return Image(width, height, 3); });
+        double(width) * double(height) * (channels + 7.0 * (aov_mask != 0)) * 4.0, "lower --res", [&] {
+            if (aov_mask) *aovs = make_aov_images(width, height, aov_mask);
+            return Image(width, height, channels);
+        });
     const uint64_t total = uint64_t(width) * uint64_t(height) * uint64_t(spp);
     std::atomic<uint64_t> done{0};
     std::atomic<uint64_t> dropped{0};
@@ -42,10 +51,13 @@ Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const 
         for (int y = r.rows().begin(); y < r.rows().end(); ++y)
             for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
                 Rgb sum(0.0f);
+                FirstHitSums first_sums;
                 for (int s = 0; s < spp; ++s) {
                     SobolSampler sampler(options.seed, uint32_t(x), uint32_t(y), uint32_t(s));
                     Ray ray = generate_camera_ray(sv.camera, x, y, sampler.next_2d());
-                    Rgb l = trace_path(sv, tracer, ray, sampler, ps);
+                    FirstHit first;
+                    Rgb l = trace_path(sv, tracer, ray, sampler, ps, record_first ? &first : nullptr);
+                    add_first_hit(first_sums, first);  // a dropped sample's coverage still counts
                     if (is_finite(l)) {
                         sum += l;
                     } else {
@@ -56,6 +68,12 @@ Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const 
                 px[0] = sum.x / float(spp);
                 px[1] = sum.y / float(spp);
                 px[2] = sum.z / float(spp);
+                if (channels == 4) px[3] = 1.0f - first_sums.escaped / float(spp);
+                if (aov_mask) {
+                    const FirstHitAovs a = resolve_first_hit(first_sums.weight, first_sums.albedo,
+                                                             first_sums.normal, first_sums.distance);
+                    aovs->set(size_t(y) * size_t(width) + size_t(x), a.albedo, a.normal, a.depth);
+                }
             }
         uint64_t n = uint64_t(r.rows().size()) * uint64_t(r.cols().size()) * uint64_t(spp);
         uint64_t now = done.fetch_add(n) + n;

@@ -6,6 +6,8 @@
 
 namespace npt::render::cpu {
 
-Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const ProgressFn& progress);
+// render::render's CPU half (renderer.h): RGB or, with options.transparent, RGBA; the AOVs into *aovs.
+Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const ProgressFn& progress,
+                 AovImages* aovs = nullptr);
 
 }  // namespace npt::render::cpu

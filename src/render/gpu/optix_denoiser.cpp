@@ -41,9 +41,10 @@ OptixDenoiserPass::~OptixDenoiserPass() {
 
 Image OptixDenoiserPass::run(const Image& noisy, const float4* albedo, const float4* normal) {
     const size_t n = size_t(m_width) * size_t(m_height);
+    const size_t c = size_t(noisy.channels);
     std::vector<float4> in(n);
     for (size_t i = 0; i < n; ++i)
-        in[i] = make_float4(noisy.pixels[3 * i], noisy.pixels[3 * i + 1], noisy.pixels[3 * i + 2], 1.0f);
+        in[i] = make_float4(noisy.pixels[c * i], noisy.pixels[c * i + 1], noisy.pixels[c * i + 2], 1.0f);
     DeviceBuffer<float4> input(in), output(n, "the denoised image", "--res");
 
     auto image = [&](const float4* p) {
@@ -69,11 +70,12 @@ Image OptixDenoiserPass::run(const Image& noisy, const float4* albedo, const flo
     cuda_check(cudaStreamSynchronize(m_stream), "denoising");
 
     const std::vector<float4> out = output.download();
-    Image result(noisy.width, noisy.height, 3);
+    Image result(noisy.width, noisy.height, noisy.channels);
     for (size_t i = 0; i < n; ++i) {
-        result.pixels[3 * i] = out[i].x;
-        result.pixels[3 * i + 1] = out[i].y;
-        result.pixels[3 * i + 2] = out[i].z;
+        result.pixels[c * i] = out[i].x;
+        result.pixels[c * i + 1] = out[i].y;
+        result.pixels[c * i + 2] = out[i].z;
+        if (c == 4) result.pixels[c * i + 3] = noisy.pixels[c * i + 3];
     }
     return result;
 }

@@ -19,7 +19,8 @@ class OptixDenoiserPass {
     OptixDenoiserPass(const OptixDenoiserPass&) = delete;
     OptixDenoiserPass& operator=(const OptixDenoiserPass&) = delete;
 
-    // noisy: linear RGB (3 channels); albedo and normal: device guides of the same size (float4 per pixel).
+    // noisy: linear RGB (3 channels) or premultiplied RGBA (4: the alpha is kept as it is); albedo and normal:
+    // device guides of the same size (float4 per pixel). The result has noisy's channels.
     Image run(const Image& noisy, const float4* albedo, const float4* normal);
 
   private:

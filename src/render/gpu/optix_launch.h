@@ -21,9 +21,12 @@ struct HitRecordData {
 struct LaunchParams {
     render::SceneView scene;  // device copies (device_scene.h)
     OptixTraversableHandle handle = 0;
-    // slots planes of width * height running sums of radiance (w unused): launch index z adds samples
-    // sample_begin + z, + z + slots, ... of its pixel to plane z (optix_renderer.cpp adds the planes).
+    // slots planes of width * height running sums of radiance and (w) of FirstHit::escaped: launch index z adds
+    // samples sample_begin + z, + z + slots, ... of its pixel to plane z (optix_renderer.cpp adds the planes).
     float4* accum = nullptr;
+    // The AOVs' sums (render/first_hit.h), null when none is asked for: 2 * slots planes, plane 2z holding
+    // (albedo sum, weight), plane 2z + 1 (normal sum, distance sum) of slot z.
+    float4* first_hit = nullptr;
     uint32_t slots = 1;
     // The denoiser's guides, written by the launch with sample_begin 0, slot 0 (null: no denoising): the first
     // surface's albedo and its shading normal in camera axes (right, up, towards the camera), per pixel.

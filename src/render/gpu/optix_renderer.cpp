@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <string>
+#include <utility>
 
 #include "core/cuda/device_buffer.h"
 #include "core/error.h"
@@ -46,7 +47,7 @@ struct StreamOwner {
 struct OptixRenderer::PinnedImage {
     Image image;
     bool pinned = false;
-    PinnedImage(int w, int h) : image(w, h, 3) {
+    PinnedImage(int w, int h, int channels) : image(w, h, channels) {
         pinned = cudaHostRegister(image.pixels.data(), image.pixels.size() * sizeof(float), cudaHostRegisterDefault) ==
                  cudaSuccess;
         if (!pinned) {
@@ -103,16 +104,20 @@ struct OptixRenderer::State {
     std::unique_ptr<WavefrontLoop> wavefront;  // null: the per-thread form
     // Kept from frame to frame (an allocation and a free cost more than a 1080p frame of the baked demo).
     DeviceBuffer<float4> accum;
-    DeviceBuffer<float> rgb;
+    DeviceBuffer<float> rgb;  // the resolved image, 3 or 4 floats a pixel
+    DeviceBuffer<float4> first_hit;  // the AOVs' planes (optix_launch.h), when asked for
+    DeviceBuffer<float> aov_out;     // the resolved AOVs: albedo, normal (3 floats a pixel), depth (1)
     DeviceBuffer<unsigned long long> dropped{1};
     DeviceBuffer<LaunchParams> params{1};
     std::unique_ptr<PinnedImage> frame;  // render_frame's, made by its first call
 
-    // Renders into the device image (rgb); with albedo and normal, also writes the denoiser's guides there.
+    // Renders into the device image (rgb); with albedo and normal, also writes the denoiser's guides there;
+    // with `aovs`, the AOVs of options.aovs into aov_out.
     void trace(const render::RenderOptions& options, const render::ProgressFn& progress, float4* albedo,
-               float4* normal);
-    // Downloads the device image into host_rgb (3 floats per pixel) and warns about dropped samples.
-    void download(float* host_rgb);
+               float4* normal, bool aovs);
+    // Downloads the device image into `image` (its channels: the render's) and the AOVs asked for into *aovs
+    // (null: none), and warns about dropped samples.
+    void download(Image& image, render::AovImages* aovs);
 };
 
 OptixRenderer::OptixRenderer(const scene::Scene& scene, int width, int height) {
@@ -124,7 +129,7 @@ OptixRenderer::OptixRenderer(const scene::Scene& scene, int width, int height) {
 OptixRenderer::~OptixRenderer() = default;
 
 Image OptixRenderer::render(const render::RenderOptions& options, const render::ProgressFn& progress,
-                            Image* denoised) {
+                            Image* denoised, render::AovImages* aovs) {
     const size_t pixels = size_t(m->width) * size_t(m->height);
     cudaStream_t stream = m->stream.s;
     std::unique_ptr<OptixDenoiserPass> denoiser;
@@ -134,24 +139,39 @@ Image OptixRenderer::render(const render::RenderOptions& options, const render::
         albedo.allocate(pixels, "the denoiser's guides", "--res");
         normal.allocate(pixels, "the denoiser's guides", "--res");
     }
-    m->trace(options, progress, albedo.data(), normal.data());
-    Image image(m->width, m->height, 3);
-    m->download(image.pixels.data());
+    const bool want_aovs = aovs && options.aovs != 0;
+    m->trace(options, progress, albedo.data(), normal.data(), want_aovs);
+    Image image(m->width, m->height, options.transparent ? 4 : 3);
+    if (want_aovs) *aovs = render::make_aov_images(m->width, m->height, options.aovs);
+    m->download(image, want_aovs ? aovs : nullptr);
     if (denoiser) *denoised = denoiser->run(image, albedo.data(), normal.data());
     return image;
 }
 
 const Image& OptixRenderer::render_frame(const render::RenderOptions& options) {
-    if (!m->frame) m->frame = std::make_unique<PinnedImage>(m->width, m->height);
-    m->trace(options, {}, nullptr, nullptr);
-    m->download(m->frame->image.pixels.data());
+    const int channels = options.transparent ? 4 : 3;
+    if (!m->frame || m->frame->image.channels != channels)
+        m->frame = std::make_unique<PinnedImage>(m->width, m->height, channels);
+    m->trace(options, {}, nullptr, nullptr, false);
+    m->download(m->frame->image, nullptr);
     return m->frame->image;
 }
 
-void OptixRenderer::State::download(float* host_rgb) {
+void OptixRenderer::State::download(Image& image, render::AovImages* aovs) {
     cudaStream_t s = stream.s;
-    cuda_check(cudaMemcpyAsync(host_rgb, rgb.data(), rgb.bytes(), cudaMemcpyDeviceToHost, s),
+    const size_t pixels = size_t(width) * size_t(height);
+    if (image.pixels.size() != rgb.size()) throw Error("OptixRenderer: the image has the wrong number of channels");
+    cuda_check(cudaMemcpyAsync(image.pixels.data(), rgb.data(), rgb.bytes(), cudaMemcpyDeviceToHost, s),
                "downloading the image");
+    if (aovs) {
+        const std::pair<Image*, size_t> layers[] = {
+            {&aovs->albedo, 0}, {&aovs->normal, 3 * pixels}, {&aovs->depth, 6 * pixels}};
+        for (const auto& [layer, offset] : layers)
+            if (!layer->pixels.empty())
+                cuda_check(cudaMemcpyAsync(layer->pixels.data(), aov_out.data() + offset,
+                                           layer->pixels.size() * sizeof(float), cudaMemcpyDeviceToHost, s),
+                           "downloading the AOVs");
+    }
     unsigned long long bad = 0;
     cuda_check(cudaMemcpyAsync(&bad, dropped.data(), sizeof bad, cudaMemcpyDeviceToHost, s),
                "cudaMemcpyAsync");
@@ -160,7 +180,7 @@ void OptixRenderer::State::download(float* host_rgb) {
 }
 
 void OptixRenderer::State::trace(const render::RenderOptions& options, const render::ProgressFn& progress,
-                                 float4* albedo, float4* normal) {
+                                 float4* albedo, float4* normal, bool aovs) {
     if (options.width != width || options.height != height)
         throw Error("OptixRenderer: built for " + std::to_string(width) + "x" + std::to_string(height) +
                     ", asked for " + std::to_string(options.width) + "x" + std::to_string(options.height));
@@ -174,7 +194,13 @@ void OptixRenderer::State::trace(const render::RenderOptions& options, const ren
     const uint32_t slots = slots_for(pixels, spp);
     if (accum.size() < pixels * slots) accum.allocate(pixels * slots, "the image", "--res");
     cuda_check(cudaMemsetAsync(accum.data(), 0, pixels * slots * sizeof(float4), s), "cudaMemsetAsync");
-    if (rgb.size() != 3 * pixels) rgb.allocate(3 * pixels, "the image", "--res");
+    const int channels = options.transparent ? 4 : 3;
+    if (rgb.size() != size_t(channels) * pixels) rgb.allocate(size_t(channels) * pixels, "the image", "--res");
+    if (aovs) {
+        if (first_hit.size() < 2 * pixels * slots) first_hit.allocate(2 * pixels * slots, "the AOVs", "--res");
+        cuda_check(cudaMemsetAsync(first_hit.data(), 0, 2 * pixels * slots * sizeof(float4), s), "cudaMemsetAsync");
+        if (aov_out.size() < 7 * pixels) aov_out.allocate(7 * pixels, "the AOVs", "--res");
+    }
     dropped.zero_async(s);
 
     LaunchParams p;
@@ -189,6 +215,8 @@ void OptixRenderer::State::trace(const render::RenderOptions& options, const ren
     p.albedo = albedo;
     p.normal = normal;
     p.path.max_depth = options.max_depth;
+    p.path.transparent_background = options.transparent;
+    p.first_hit = aovs ? first_hit.data() : nullptr;
 
     const uint64_t total = uint64_t(pixels) * spp;
     uint32_t done = 0, batch = slots;  // the first launch: one sample per slot
@@ -227,13 +255,17 @@ void OptixRenderer::State::trace(const render::RenderOptions& options, const ren
         batch = std::max(slots, uint32_t(next) / slots * slots);
     }
 
-    resolve_image(accum.data(), slots, pixels, 1.0f / float(spp), rgb.data(), s);
+    resolve_image(accum.data(), slots, pixels, 1.0f / float(spp), channels, rgb.data(), s);
+    if (aovs)
+        resolve_first_hits(first_hit.data(), slots, pixels, options.aovs & render::k_aov_albedo ? aov_out.data() : nullptr,
+                           options.aovs & render::k_aov_normal ? aov_out.data() + 3 * pixels : nullptr,
+                           options.aovs & render::k_aov_depth ? aov_out.data() + 6 * pixels : nullptr, s);
 }
 
 Image render_optix(const scene::Scene& scene, const render::RenderOptions& options,
-                   const render::ProgressFn& progress, Image* denoised) {
+                   const render::ProgressFn& progress, Image* denoised, render::AovImages* aovs) {
     OptixRenderer renderer(scene, options.width, options.height);
-    return renderer.render(options, progress, denoised);
+    return renderer.render(options, progress, denoised, aovs);
 }
 
 }  // namespace npt::gpu

@@ -19,10 +19,11 @@ class OptixRenderer {
     OptixRenderer(const OptixRenderer&) = delete;
     OptixRenderer& operator=(const OptixRenderer&) = delete;
 
-    // options.spp samples per pixel from options.seed (width and height as constructed). With `denoised`, also
-    // runs the denoiser (albedo and normal guides) and puts its image there.
+    // options.spp samples per pixel from options.seed (width and height as constructed): RGB, or RGBA with
+    // options.transparent. With `denoised`, also runs the denoiser (albedo and normal guides) and puts its image
+    // there; with `aovs`, the layers of options.aovs go there (render/film.h).
     Image render(const render::RenderOptions& options, const render::ProgressFn& progress,
-                 Image* denoised = nullptr);
+                 Image* denoised = nullptr, render::AovImages* aovs = nullptr);
     // The same render into the renderer's own page-locked frame (frames of a viewer or an animation): no image
     // allocated per frame and a download at the bus's speed. The reference holds until the next call.
     const Image& render_frame(const render::RenderOptions& options);
@@ -35,6 +36,7 @@ class OptixRenderer {
 
 // One render: construct, render, release.
 Image render_optix(const scene::Scene& scene, const render::RenderOptions& options,
-                   const render::ProgressFn& progress, Image* denoised = nullptr);
+                   const render::ProgressFn& progress, Image* denoised = nullptr,
+                   render::AovImages* aovs = nullptr);
 
 }  // namespace npt::gpu

@@ -14,12 +14,17 @@ extern "C" __global__ void __raygen__render() {
     const uint32_t slot = idx.z;
     const OptixTracer tracer;
     Rgb sum(0.0f);
+    render::FirstHitSums first_sums;
+    const bool record_first = film_records_first_hit();
     const uint32_t end = params.sample_begin + params.sample_count;
     for (uint32_t s = params.sample_begin + slot; s < end; s += params.slots) {
         // The CPU's sampler for (pixel, sample): the same random numbers, decision by decision.
         SobolSampler sampler(params.seed, uint32_t(x), uint32_t(y), s);
         const Ray ray = render::generate_camera_ray(params.scene.camera, x, y, sampler.next_2d());
-        const Rgb l = render::trace_path(params.scene, tracer, ray, sampler, params.path);
+        render::FirstHit first;
+        const Rgb l = render::trace_path(params.scene, tracer, ray, sampler, params.path,
+                                         record_first ? &first : nullptr);
+        render::add_first_hit(first_sums, first);  // a dropped sample's coverage still counts, as on the CPU
         if (is_finite(l))
             sum += l;
         else
@@ -27,7 +32,8 @@ extern "C" __global__ void __raygen__render() {
     }
     const size_t pixel = size_t(y) * size_t(params.width) + size_t(x);
     float4& a = params.accum[size_t(slot) * size_t(params.width) * size_t(params.height) + pixel];
-    a = make_float4(a.x + sum.x, a.y + sum.y, a.z + sum.z, 0.0f);
+    a = make_float4(a.x + sum.x, a.y + sum.y, a.z + sum.z, a.w);
+    if (record_first) film_add_first_hits(slot, pixel, first_sums);
 
     if (params.albedo && params.sample_begin == 0 && slot == 0) {
         // Guides for the denoiser: what the pixel's centre sees first.

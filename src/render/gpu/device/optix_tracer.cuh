@@ -56,5 +56,22 @@ struct OptixTracer {
     }
 };
 
+// The camera ray's first hit is recorded only where the film needs it (alpha or AOVs).
+__device__ NPT_INLINE bool film_records_first_hit() {
+    return params.path.transparent_background || params.first_hit != nullptr;
+}
+
+// Adds a pixel's first-hit sums to slot `slot` of the film: the escaped transmittance to accum's w, the AOVs to
+// their planes. Each (slot, pixel) belongs to one thread at a time, so plain read-modify-writes suffice.
+__device__ NPT_INLINE void film_add_first_hits(uint32_t slot, size_t pixel, const render::FirstHitSums& s) {
+    const size_t pixels = size_t(params.width) * size_t(params.height);
+    params.accum[size_t(slot) * pixels + pixel].w += s.escaped;
+    if (!params.first_hit) return;
+    float4& a = params.first_hit[2 * size_t(slot) * pixels + pixel];
+    float4& n = params.first_hit[(2 * size_t(slot) + 1) * pixels + pixel];
+    a = make_float4(a.x + s.albedo.x, a.y + s.albedo.y, a.z + s.albedo.z, a.w + s.weight);
+    n = make_float4(n.x + s.normal.x, n.y + s.normal.y, n.z + s.normal.z, n.w + s.distance);
+}
+
 }  // namespace
 }  // namespace npt

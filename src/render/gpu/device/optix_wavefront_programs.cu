@@ -30,7 +30,7 @@ __device__ void write_path(gpu::WavefrontPath& p) {
     const Rgb l = p.st.radiance;
     if (is_finite(l)) {
         float4& a = params.accum[size_t(p.slot) * size_t(params.width) * size_t(params.height) + p.pixel];
-        a = make_float4(a.x + l.x, a.y + l.y, a.z + l.z, 0.0f);
+        a = make_float4(a.x + l.x, a.y + l.y, a.z + l.z, a.w);  // w: the film's, film_add_first_hits
     } else {
         atomicAdd(params.dropped, 1ull);
     }
@@ -73,8 +73,16 @@ extern "C" __global__ void __raygen__wavefront() {
         // trace_path's loop body after the volume ray (path_integrator.h).
         render::ShadowRequest shadow;
         Ray next;
+        // The camera ray's vertex: its first hit goes straight to the film (no room in the path's state).
+        const bool record_first = p.st.depth == 0 && film_records_first_hit();
+        render::FirstHit first;
         const bool more = render::path_scatter(params.scene, tracer, p.st, p.ray, p.found, p.hit, sampler,
-                                               params.path, &shadow, &next);
+                                               params.path, &shadow, &next, record_first ? &first : nullptr);
+        if (record_first) {
+            render::FirstHitSums sums;
+            render::add_first_hit(sums, first);
+            film_add_first_hits(p.slot, p.pixel, sums);
+        }
         if (shadow.pending) {
             p.shadow_t = 1.0f;
             p.shadow_contribution = shadow.contribution;
