@@ -29,10 +29,10 @@ pack)
     build=${BUILD_DIR:-build}
     cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DNERFPT_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 \
         ${CUDACXX:+-DCMAKE_CUDA_COMPILER=$CUDACXX} >/dev/null
-    cmake --build "$build" --target nerfpt_gpu_tests nerfpt_cli train_bench view_bench render_bench
+    cmake --build "$build" --target nerfpt_gpu_tests nerfpt_cli train_bench view_bench render_bench relight_fields
     rm -rf .gpu/stage && mkdir -p .gpu/stage/bin .gpu/stage/lib
     cp "$build/tests/nerfpt_gpu_tests" "$build/nerfpt" "$build/bench/train_bench" "$build/bench/view_bench" \
-        "$build/bench/render_bench" .gpu/stage/bin/
+        "$build/bench/render_bench" "$build/bench/relight_fields" .gpu/stage/bin/
     # Everything ldd resolves outside the C runtime travels along (the GPU machine runs another distribution).
     for b in .gpu/stage/bin/*; do ldd "$b"; done | awk '/=> \// {print $3}' | sort -u |
         grep -v -E '/(libc|libm|libdl|libpthread|librt|libgcc_s|libstdc\+\+|ld-linux[^/]*|libcuda)\.so' |
@@ -66,6 +66,12 @@ for f in t["frames"]:
     shutil.copy(f"{src}/{f['file_path']}.png", f"{dst}/{f['file_path']}.png")
 json.dump(t, open(f"{dst}/transforms_test.json", "w"), indent=1)
 EOF
+    fi
+    # The relighting set (issue 24) for scripts/gpu_relight_cycle.sh: carry .gpu/relight when it is needed.
+    rsrc=${NERFPT_SHARED_DATA:-../shared/data}/relight
+    if [[ -d $rsrc/dev ]]; then
+        rm -rf .gpu/relight && mkdir -p .gpu/relight
+        cp -r "$rsrc/dev" "$rsrc/score.py" .gpu/relight/
     fi
     du -sh .gpu
     ;;

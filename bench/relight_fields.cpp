@@ -1,0 +1,97 @@
+// The intrinsic fields of a relightable model seen from a data set's cameras: per pixel, the albedo and the normal
+// (training world, the data set's axes) of camera-ray scattering events drawn from the volume weights, averaged
+// over `spp` events (what a relit render's first-event AOVs converge to), as `albedo_N.exr` / `normal_N.exr` for
+// ../shared/data/relight/score.py (run it with --normals-zup). Prints a table of time and coverage.
+//   relight_fields MODEL.npt DATA/transforms_test.json OUT_DIR [--spp 8] [--backend cpu|cuda]
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/progress.h"
+#include "core/rng.h"
+#include "nerf/backend/nerf_backend.h"
+#include "nerf/dataset.h"
+#include "nerf/model_file.h"
+#include "nerf/relight/wavefront_march.h"
+
+using namespace npt;
+using namespace npt::nerf;
+
+int main(int argc, char** argv) try {
+    if (argc < 4) {
+        fmt::print(stderr, "usage: relight_fields MODEL.npt TRANSFORMS.json OUT_DIR [--spp N] [--backend cpu|cuda]\n");
+        return 2;
+    }
+    int spp = 8;
+    std::string backend_name;
+    for (int i = 4; i + 1 < argc; i += 2) {
+        if (std::strcmp(argv[i], "--spp") == 0) spp = std::max(1, std::atoi(argv[i + 1]));
+        if (std::strcmp(argv[i], "--backend") == 0) backend_name = argv[i + 1];
+    }
+    const NerfModel model = load_model(argv[1]);
+    if (!model.relightable()) throw Error(std::string(argv[1]) + ": the model is not relightable");
+    const Dataset data = load_dataset(argv[2], "");
+    const std::filesystem::path out = argv[3];
+    std::filesystem::create_directories(out);
+    const Backend backend = choose_backend(backend_name).backend;
+    auto query = make_field_query(backend, model);
+    const IntrinsicFieldView intrinsic = model.intrinsic();
+    const Mat4 m2w = model.world_to_model.inverse();
+    const double t0 = Progress::steady_seconds();
+    double coverage = 0;
+    for (size_t v = 0; v < data.cameras.size(); ++v) {
+        const Camera& cam = data.cameras[v];
+        const int W = data.width, H = data.height;
+        std::vector<WaveRay> rays(size_t(W) * H * spp);
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x)
+                for (int s = 0; s < spp; ++s) {
+                    Pcg32 rng = Pcg32::for_pixel(v, uint32_t(x), uint32_t(y), uint32_t(s));
+                    const Ray world = generate_pixel_ray(cam, x + rng.next_float(), y + rng.next_float());
+                    WaveRay& r = rays[(size_t(y) * W + x) * spp + s];
+                    r.ray = Ray{model.world_to_model.transform_point(world.o),
+                                normalize(model.world_to_model.transform_vector(world.d))};
+                    r.jitter = rng.next_float();
+                    r.tau_target = -std::log1p(-std::min(rng.next_float(), 0.999999f));
+                }
+        march_wavefront(model, *query, rays, WaveMode::event);
+        Image albedo(W, H, 3), normal(W, H, 3);
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                Rgb a(0.0f);
+                Vec3 n(0.0f);
+                int hits = 0;
+                for (int s = 0; s < spp; ++s) {
+                    const WaveRay& r = rays[(size_t(y) * W + x) * spp + s];
+                    if (!r.has_event) continue;
+                    const IntrinsicSample is = intrinsic.query(r.event_position);
+                    a += is.albedo;
+                    Vec3 nw = normalize(m2w.transform_vector(is.normal));
+                    if (dot(nw, m2w.transform_vector(r.ray.d)) > 0.0f) nw = -nw;  // toward the camera
+                    n += nw;
+                    ++hits;
+                }
+                coverage += double(hits) / spp;
+                a = a / float(spp);
+                n = n / float(spp);
+                std::memcpy(albedo.at(x, y), &a, 12);
+                std::memcpy(normal.at(x, y), &n, 12);
+            }
+        write_exr(out / fmt::format("albedo_{}.exr", v), albedo);
+        write_exr(out / fmt::format("normal_{}.exr", v), normal);
+    }
+    const double secs = Progress::steady_seconds() - t0;
+    fmt::print("| views | size | spp | backend | seconds | mean coverage |\n|---|---|---|---|---|---|\n");
+    fmt::print("| {} | {}x{} | {} | {} | {:.1f} | {:.3f} |\n", data.cameras.size(), data.width, data.height, spp,
+               backend_name.empty() ? "auto" : backend_name, secs,
+               coverage / (double(data.cameras.size()) * data.width * data.height));
+    return 0;
+} catch (const std::exception& e) {
+    fmt::print(stderr, "relight_fields: error: {}\n", e.what());
+    return 1;
+}
