@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -85,7 +86,11 @@ TEST(RelitMedium, WhiteFurnaceBalancesEmissionAndAbsorptionAtAnyDensity) {
             }
             EXPECT_NEAR(total.mean(), 1.0, 4.0 * total.se() + 2e-4) << "sigma " << sigma << " roughness " << roughness;
             EXPECT_LE(lit.mean(), 1.0 + 4.0 * lit.se()) << "no energy gained";
-            if (sigma >= 50.0f) EXPECT_LT(lit.mean(), 0.99) << "dense: the BSDF's losses must show";
+            std::printf("sigma %g roughness %g: L %.4f +- %.4f, L + absorbed %.4f +- %.4f\n", sigma, roughness,
+                        lit.mean(), lit.se(), total.mean(), total.se());
+            if (roughness == 1.0f && sigma >= 5.0f) {
+                EXPECT_LT(lit.mean() + 4.0 * lit.se(), 1.0) << "rough and not thin: the BSDF's losses must show";
+            }
         }
     }
 }
@@ -169,9 +174,9 @@ TEST(RelitMedium, DenseBallUnderTheSunMatchesTheAnalyticDirectLightAndShadows) {
     // The blocker: along the sun's direction (in model space) from a point on the big ball's lit side.
     const Mat4 world_to_model = place.inverse();  // world -> local, despite the name; local -> model below
     const Vec3 big_world = world_point(place, v, f.centre[0]);
-    const Vec3 blocker_world = big_world - travel * 0.45f + Vec3(0.08f, 0.0f, 0.0f);
+    const Vec3 blocker_world = big_world - travel * 0.7f + Vec3(0.05f, 0.0f, 0.0f);
     f.centre[1] = v.nerf.local_to_model.point(world_to_model.transform_point(blocker_world));
-    f.radius[1] = 0.06f;
+    f.radius[1] = 0.1f;
     f.count = 2;
 
     const nerf::LocalToModel& l2m = v.nerf.local_to_model;
@@ -227,6 +232,7 @@ TEST(RelitMedium, DenseBallUnderTheSunMatchesTheAnalyticDirectLightAndShadows) {
             }
         }
     }
+    std::printf("lit %d, in the shadow %d, facing away %d\n", lit, shadowed, dark);
     EXPECT_GT(lit, 200);
     EXPECT_GT(dark, 30);
     EXPECT_GT(shadowed, 3);
@@ -336,7 +342,7 @@ Stats render_model(const scene::Scene& s, const media::VolumeView& view, int pat
     sv.volumes = Span<const media::VolumeView>{&view, 1};
     render::cpu::EmbreeScene embree(s);
     render::cpu::EmbreeTracer tracer(embree);
-    std::mt19937 g(uint32_t(seed));
+    std::mt19937 g{uint32_t(seed)};
     Pcg32 rng(seed, 1);
     render::PathSettings ps;
     const Vec3 centre = world_point(skewed_placement(), view, Vec3(0.5f));
