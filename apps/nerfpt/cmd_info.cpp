@@ -6,6 +6,8 @@
 #include <cmath>
 #include <filesystem>
 
+#include "core/error.h"
+#include "media/volume_set.h"
 #include "nerf/model_file.h"
 #include "nerf/relight/relight_env.h"
 #include "scene/scene.h"
@@ -145,6 +147,30 @@ void print_camera(const Scene& s) {
     }
 }
 
+// How the renderer will shade a volume (docs/formats.md, "shading"): a model without an explicit shading is
+// loaded to see whether it is relightable. A volume the renderer would refuse says why.
+std::string volume_shading(const Scene& s, const scene::VolumeInstance& v) {
+    const std::filesystem::path& declared = v.declared_in.empty() ? s.source : v.declared_in;
+    const std::string where = declared.string() + ": node '" + v.name + "'";
+    try {
+        const media::VolumeDesc d = media::parse_volume_desc(v.extras_json, where);
+        std::filesystem::path file = d.file;
+        if (file.is_relative()) file = declared.parent_path() / file;
+        if (file.extension() != ".npt") {
+            if (d.shading == media::VolumeShading::Relit)
+                return "invalid: \"relit\" is for NeRF models (.npt) only";
+            return "emissive (a grid)";
+        }
+        if (d.shading == media::VolumeShading::Emissive) return "emissive";
+        const bool relit = media::volume_is_relit(d, nerf::load_model(file).relightable(), where);
+        if (d.shading == media::VolumeShading::Relit) return "relit";
+        return relit ? "relit (the default for a relightable model)"
+                     : "emissive (the default: the model is not relightable)";
+    } catch (const Error& e) {
+        return std::string("invalid: ") + e.what();
+    }
+}
+
 void print_volumes(const Scene& s) {
     fmt::print("volumes    {}\n", s.volumes.size());
     for (const auto& v : s.volumes) {
@@ -161,6 +187,7 @@ void print_volumes(const Scene& s) {
         fmt::print("  '{}' world bounds {} .. {}, translation {}\n", v.name, vec(lo), vec(hi),
                    vec(Vec3(float(m[0][3]), float(m[1][3]), float(m[2][3]))));
         fmt::print("    extras {}\n", v.extras_json.empty() ? "(none)" : v.extras_json);
+        fmt::print("    shading {}\n", volume_shading(s, v));
     }
 }
 

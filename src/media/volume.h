@@ -9,6 +9,7 @@
 #include "nerf/nerf_field.h"
 #include "nerf/nerf_placement.h"
 #include "nerf/occupancy_view.h"
+#include "nerf/relight/intrinsic_field.h"
 #include "nerf/ray_march.h"
 
 namespace npt::media {
@@ -33,6 +34,10 @@ struct NerfVolumeView {
     nerf::OccupancyGridView occupancy;
     nerf::MarchParams march;  // aabb = the crop box in model space
     nerf::LocalToModel local_to_model;
+    // Shading "relit" (relit_free_flight.h): the model scatters the scene's light with the BSDF of its
+    // intrinsic fields instead of emitting its colour; `intrinsic` is valid exactly then.
+    bool relit = false;
+    nerf::IntrinsicFieldView intrinsic;
 };
 
 enum class VolumeKind : uint8_t { Grid, Nerf };

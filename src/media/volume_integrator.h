@@ -11,7 +11,9 @@
 #include "core/platform.h"
 #include "core/srgb.h"
 #include "core/vec.h"
+#include "media/relit_free_flight.h"
 #include "media/volume.h"
+#include "media/volume_ray.h"
 #if !defined(__CUDACC__)
 #include <vector>
 
@@ -27,27 +29,6 @@ struct VolumeResult {
     Rgb radiance{0.0f};          // emission reaching the segment's start
     float transmittance = 1.0f;  // exp(-optical depth) over the segment; 0 once below 1e-4
 };
-
-// Slab test in the cube's local space; t is shared with world space because the map is affine.
-NPT_HD NPT_INLINE bool intersect_box(Vec3 o, Vec3 d, Vec3 lo, Vec3 hi, float tmin, float tmax, float* t0,
-                                     float* t1) {
-    for (int a = 0; a < 3; ++a) {
-        float inv = 1.0f / d[a];
-        float ta = (lo[a] - o[a]) * inv, tb = (hi[a] - o[a]) * inv;
-        if (ta > tb) {
-            float s = ta;
-            ta = tb;
-            tb = s;
-        }
-        // NaN (ray parallel to and on a slab plane) leaves the interval unchanged.
-        if (ta > tmin) tmin = ta;
-        if (tb < tmax) tmax = tb;
-        if (tmin > tmax) return false;
-    }
-    *t0 = tmin;
-    *t1 = tmax;
-    return tmax > tmin;
-}
 
 // A volume as seen by one ray: its index-space line x(t) = xo + t xd and its step.
 struct VolumeOnRay {
@@ -170,23 +151,6 @@ NPT_HD NPT_INLINE void add_nerf_sample(Accumulator& acc, float sigma, Rgb srgb, 
     acc.add(sigma * density_scale, c, dt);
 }
 
-// The segment [ta, tb] of a world ray through a NeRF volume in model space: a ray from the segment's start with a
-// unit direction (*mray) and the segment's length in model units (*t_max), so the march's own box test and t_max
-// clip it to [ta, tb]. False for a degenerate or non-finite direction (nothing to march). Shared with the GPU's
-// NeRF pass, which gets the segment in this form (render/gpu/wavefront.h).
-NPT_HD NPT_INLINE bool nerf_model_segment(const VolumeView& v, const Ray& ray, float ta, float tb, Ray* mray,
-                                          float* t_max) {
-    const NerfVolumeView& n = v.nerf;
-    const Vec3 lo = v.world_to_local.apply(ray.o), ld = v.world_to_local.apply_vector(ray.d);
-    const Vec3 om = n.local_to_model.point(lo), dm = n.local_to_model.vector(ld);
-    const float len = length(dm);  // model units per unit of t
-    if (!(len > 0.0f) || !isfinite(len)) return false;
-    const Vec3 dir = dm / len;
-    *mray = Ray{om + dir * (ta * len), dir};
-    *t_max = (tb - ta) * len;
-    return true;
-}
-
 // A NeRF volume over [ta, tb] of the world ray: marched in model space through its occupancy grid, each sample
 // absorbing with sigma (per model unit, integrated over the model-space step, so the node's scale does not
 // change how opaque the object looks) and emitting its colour for the ray's own direction (view-dependent),
@@ -247,10 +211,29 @@ NPT_HD NPT_INLINE void march_nerf(const VolumeView& v, const Ray& ray, float ta,
 #endif
 }
 
+// A relit NeRF on [ta, tb] (relit_free_flight.h). Radiance rays with a free flight sample their event there;
+// shadow rays (and radiance rays that ask for no event) see its transmittance only. It never emits.
+NPT_HD NPT_INLINE void march_relit_nerf(const VolumeView& v, int index, const Ray& ray, float ta, float tb,
+                                        float xi, bool shadow, FreeFlight* flight, Accumulator& acc) {
+    if (!shadow && flight) {
+        march_relit(v, relit_field(v), ray, ta, tb, xi, *flight);
+        if (flight->event && flight->volume < 0) flight->volume = index;
+        return;
+    }
+    FreeFlight absorb;  // no target: the optical depth until the accumulator's own cut-off
+    absorb.tau_stop = acc.log_t - k_log_min_transmittance;
+    march_relit(v, relit_field(v), ray, ta, tb, xi, absorb);
+    acc.log_t -= absorb.tau;
+}
+
 // Integrates every volume the ray crosses on [t_begin, t_end]. `shadow`: transmittance only, and only volumes
-// that cast shadows. `xi` in [0,1) offsets the step lattice.
+// that cast shadows. `xi` in [0,1) offsets the step lattice. `flight` (radiance rays, optional): the free flight
+// through relit NeRFs, whose optical depth it takes instead of the result's transmittance (the path's throughput
+// is then the relit volumes' no-event probability times this transmittance); marching stops at its event, with
+// the emission of the other volumes up to there.
 NPT_HD NPT_INLINE VolumeResult integrate_volumes(Span<const VolumeView> volumes, const Ray& ray,
-                                                 float t_begin, float t_end, float xi, bool shadow) {
+                                                 float t_begin, float t_end, float xi, bool shadow,
+                                                 FreeFlight* flight = nullptr) {
     VolumeResult result;
     VolumeOnRay on_ray[k_max_volumes_per_ray];
     int count = 0;
@@ -287,7 +270,7 @@ NPT_HD NPT_INLINE VolumeResult integrate_volumes(Span<const VolumeView> volumes,
         }
     Accumulator acc;
     acc.with_emission = !shadow;
-    for (int b = 0; b + 1 < nb && !acc.done(); ++b) {
+    for (int b = 0; b + 1 < nb && !acc.done() && !(flight && flight->event); ++b) {
         float ta = bounds[b], tb = bounds[b + 1];
         if (!(tb > ta)) continue;
         int active[k_max_volumes_per_ray];
@@ -304,8 +287,14 @@ NPT_HD NPT_INLINE VolumeResult integrate_volumes(Span<const VolumeView> volumes,
             march_skipping_empty(on_ray[grids[0]], ta, tb, xi, acc);
         else if (n_grids > 1)
             march_overlapping(on_ray, grids, n_grids, ta, tb, xi, acc);
-        for (int k = 0; k < n_active && !acc.done(); ++k)
-            if (on_ray[active[k]].v->kind == VolumeKind::Nerf) march_nerf(*on_ray[active[k]].v, ray, ta, tb, xi, acc);
+        for (int k = 0; k < n_active && !acc.done() && !(flight && flight->event); ++k) {
+            const VolumeView& v = *on_ray[active[k]].v;
+            if (v.kind != VolumeKind::Nerf) continue;
+            if (v.nerf.relit)
+                march_relit_nerf(v, int(&v - volumes.data), ray, ta, tb, xi, shadow, flight, acc);
+            else
+                march_nerf(v, ray, ta, tb, xi, acc);
+        }
     }
     result.radiance = acc.radiance;
     result.transmittance = acc.done() ? 0.0f : expf(acc.log_t);

@@ -61,12 +61,50 @@ VolumeDesc parse_volume_desc(const std::string& extras_json, const std::string& 
                 throw Error(where + ": extras.volume.crop: max must exceed min on every axis");
         d.has_crop = true;
     }
+    if (v.contains("shading")) {
+        const auto& sh = v["shading"];
+        const std::string value = sh.is_string() ? sh.get<std::string>() : "";
+        if (value == "relit")
+            d.shading = VolumeShading::Relit;
+        else if (value == "emissive")
+            d.shading = VolumeShading::Emissive;
+        else
+            throw Error(where + ": extras.volume.shading: expected \"relit\" or \"emissive\"");
+    }
     if (v.contains("casts_shadows")) {
         if (!v["casts_shadows"].is_boolean())
             throw Error(where + ": extras.volume.casts_shadows: expected true or false");
         d.casts_shadows = v["casts_shadows"].get<bool>();
     }
     return d;
+}
+
+bool volume_is_relit(const VolumeDesc& desc, bool relightable, const std::string& where) {
+    if (desc.shading == VolumeShading::Relit && !relightable)
+        throw Error(where + ": extras.volume.shading: \"relit\" needs a relightable model, and " + desc.file +
+                    " is not one (train it with `nerfpt train --relightable`, or use \"emissive\")");
+    return desc.shading == VolumeShading::Relit || (desc.shading == VolumeShading::Auto && relightable);
+}
+
+void fill_nerf_volume(const nerf::NerfModel& m, const VolumeDesc& desc, Vec3 local_min, Vec3 local_max,
+                      const std::string& where, VolumeView& v) {
+    v.kind = VolumeKind::Nerf;
+    v.nerf.march = m.march_params();
+    nerf::CropBox box{v.nerf.march.aabb_min, v.nerf.march.aabb_max};  // the model's box
+    if (desc.has_crop) {
+        box.min = vmax(box.min, desc.crop.min);
+        box.max = vmin(box.max, desc.crop.max);
+        if (!(box.max.x > box.min.x && box.max.y > box.min.y && box.max.z > box.min.z))
+            throw Error(where + ": extras.volume.crop does not overlap the model's box (0.5 +- " +
+                        std::to_string(0.5f * m.aabb_scale) + " in model space)");
+    }
+    v.nerf.field = m.field();
+    v.nerf.occupancy = m.occupancy.view();
+    v.nerf.march.aabb_min = box.min;
+    v.nerf.march.aabb_max = box.max;
+    v.nerf.local_to_model = nerf::local_to_model(local_min, local_max, box);
+    v.nerf.relit = volume_is_relit(desc, m.relightable(), where);
+    v.nerf.intrinsic = v.nerf.relit ? m.intrinsic() : nerf::IntrinsicFieldView{};
 }
 
 VolumeSet::VolumeSet(const scene::Scene& scene) {
@@ -94,30 +132,18 @@ VolumeSet::VolumeSet(const scene::Scene& scene) {
             } catch (const Error& e) {
                 throw Error(where + ": " + e.what());
             }
-            const nerf::NerfModel& m = *owned.model;
             owned.model->training.reset();  // rendering needs the averaged parameters only
-            v.kind = VolumeKind::Nerf;
-            v.nerf.march = m.march_params();
-            nerf::CropBox box{v.nerf.march.aabb_min, v.nerf.march.aabb_max};  // the model's box
-            if (desc.has_crop) {
-                box.min = vmax(box.min, desc.crop.min);
-                box.max = vmin(box.max, desc.crop.max);
-                if (!(box.max.x > box.min.x && box.max.y > box.min.y && box.max.z > box.min.z))
-                    throw Error(where + ": extras.volume.crop does not overlap the model's box (0.5 +- " +
-                                std::to_string(0.5f * m.aabb_scale) + " in model space)");
-            }
-            v.nerf.field = m.field();
-            v.nerf.occupancy = m.occupancy.view();
-            v.nerf.march.aabb_min = box.min;
-            v.nerf.march.aabb_max = box.max;
-            v.nerf.local_to_model = nerf::local_to_model(inst.local_min, inst.local_max, box);
-            spdlog::debug("{}: NeRF model {} ({} parameters), queried directly", where, file.string(),
-                          m.params.size());
+            fill_nerf_volume(*owned.model, desc, inst.local_min, inst.local_max, where, v);
+            spdlog::debug("{}: NeRF model {} ({} parameters), queried directly, shading {}", where, file.string(),
+                          owned.model->params.size(), v.nerf.relit ? "relit" : "emissive");
             m_owned.push_back(std::move(owned));
             m_views.push_back(v);
             continue;
         }
 
+        if (desc.shading == VolumeShading::Relit)
+            throw Error(where + ": extras.volume.shading: \"relit\" is for NeRF models (.npt) only; " + desc.file +
+                        " is a grid");
         GridLoadOptions opt;
         opt.local_min = inst.local_min;
         opt.local_max = inst.local_max;

@@ -16,6 +16,10 @@
 
 namespace npt::media {
 
+// How a NeRF volume is shaded: Relit scatters the scene's light with its intrinsic fields (relightable models
+// only), Emissive adds its trained colour as emission. Auto: Relit exactly when the model is relightable.
+enum class VolumeShading : uint8_t { Auto, Relit, Emissive };
+
 // What a scene says about one volume (glTF node extras `{"volume": {...}}`, or the JSON scene's volume
 // entry).
 struct VolumeDesc {
@@ -27,10 +31,21 @@ struct VolumeDesc {
     // NeRF models only: the part of model space that fills the cube (default: the model's whole aabb).
     bool has_crop = false;
     nerf::CropBox crop;
+    VolumeShading shading = VolumeShading::Auto;  // "shading": "relit" | "emissive" (NeRF models only)
 };
+
+// The shading a volume gets: `desc` for a model that is (or is not) relightable. Throws, naming `where` and the
+// field, for "relit" on a model that is not relightable.
+bool volume_is_relit(const VolumeDesc& desc, bool relightable, const std::string& where);
 
 // Parses `extras_json` of a VolumeInstance; `where` names it in errors ("scene.gltf: node 'volume'").
 VolumeDesc parse_volume_desc(const std::string& extras_json, const std::string& where);
+
+// The NeRF parts of `v` (kind, field, occupancy, march, placement, shading) for model `m` in a cube with local
+// box [local_min, local_max]; v points into m, which must outlive it. Throws, naming `where`, for a crop
+// outside the model or "relit" on a model that is not relightable.
+void fill_nerf_volume(const nerf::NerfModel& m, const VolumeDesc& desc, Vec3 local_min, Vec3 local_max,
+                      const std::string& where, VolumeView& v);
 
 class VolumeSet {
   public:

@@ -9,7 +9,9 @@
 #include "core/vec.h"
 #include "lights/light.h"
 #include "materials/bsdf.h"
+#include "media/relit_event.h"
 #include "media/volume_integrator.h"
+#include "nerf/relight/intrinsic_field.h"
 #include "render/first_hit.h"
 #include "render/ray_offset.h"
 #include "render/surface.h"
@@ -172,6 +174,65 @@ NPT_HD NPT_DEVICE_NOINLINE bool path_scatter(const SceneView& sv, const Tracer& 
     return true;
 }
 
+// path_scatter for a scattering event in a relit NeRF (media/relit_event.h): the same light sample with the
+// same MIS, the same BSDF continuation, depth and roulette rules, in the same order of random numbers, but a
+// point with a shading frame and no surface: it emits nothing, has no geometric normal to check directions
+// against (the intrinsic BSDF only reflects, into the facing normal's hemisphere) and starts its rays from the
+// event's spawn point. Shadow rays see the volumes' transmittance (this one's included: self-shadowing).
+template <class Tracer, class Sampler>
+NPT_HD NPT_DEVICE_NOINLINE bool relit_scatter(const SceneView& sv, const Tracer& tracer, PathState& st,
+                                              const media::RelitEvent& ev, Vec3 wo_world, Sampler& sampler,
+                                              const PathSettings& ps, ShadowRequest* shadow, Ray* next) {
+    shadow->pending = false;
+    if (st.depth >= ps.max_depth) return false;
+    const materials::Bsdf bsdf = nerf::intrinsic_bsdf(ev.sample);
+    const Vec3 wo = ev.frame.to_local(wo_world);
+
+    if (!materials::bsdf_is_delta(bsdf) && ps.strategy != LightStrategy::BsdfOnly) {
+        lights::LightSample ls;
+        float u_select = sampler.next_1d();
+        Vec2 u_light = sampler.next_2d();
+        if (lights::sample_light(sv.lights, ev.origin, u_select, u_light, &ls) && ls.pdf > 0.0f &&
+            !is_black(ls.radiance)) {
+            Vec3 wi = ev.frame.to_local(ls.wi);
+            Rgb f = materials::bsdf_eval(bsdf, wo, wi) * fabsf(wi.z);
+            if (!is_black(f)) {
+                Ray sray{ev.origin, ls.wi};
+                float tmax = isinf(ls.distance) ? INFINITY : ls.distance * (1.0f - 1e-4f);
+                if (!tracer.occluded(sray, tmax)) {
+                    float w = ls.is_delta || ps.strategy == LightStrategy::LightOnly
+                                  ? 1.0f
+                                  : power_heuristic(ls.pdf, materials::bsdf_pdf(bsdf, wo, wi));
+                    shadow->ray = sray;
+                    shadow->tmax = tmax;
+                    shadow->xi = sampler.next_1d();  // a relit event implies volumes
+                    shadow->contribution = st.throughput * f * ls.radiance * (w / ls.pdf);
+                    shadow->pending = true;
+                }
+            }
+        }
+    }
+
+    materials::BsdfSample bs;
+    float u_lobe = sampler.next_1d();
+    Vec2 u_dir = sampler.next_2d();
+    if (!materials::bsdf_sample(bsdf, wo, u_lobe, u_dir, &bs) || bs.pdf <= 0.0f) return false;
+    st.throughput *= bs.f * (fabsf(bs.wi.z) / bs.pdf);
+    if (is_black(st.throughput) || !is_finite(st.throughput)) return false;
+    st.specular_bounce = bs.is_delta;
+    st.prev_bsdf_pdf = bs.pdf;
+    st.prev_p = ev.origin;
+    *next = Ray{ev.origin, ev.frame.to_world(bs.wi)};
+
+    if (st.depth + 1 >= ps.rr_start_depth) {  // as path_scatter
+        float survive = fminf(1.0f, 8.0f * max_component(st.throughput));
+        if (sampler.next_1d() >= survive) return false;
+        st.throughput *= 1.0f / survive;
+    }
+    ++st.depth;
+    return true;
+}
+
 // Radiance arriving at the ray origin along `ray`. `sampler` gives this pixel-sample's random numbers, one
 // dimension per decision in a fixed order (so low-discrepancy samplers stratify each decision). `first`,
 // when given, receives what the camera ray met first (render/first_hit.h); it does not change the radiance.
@@ -185,14 +246,30 @@ NPT_HD Rgb trace_path(const SceneView& sv, const Tracer& tracer, Ray ray, Sample
         Hit hit;
         bool found = tracer.intersect(ray, INFINITY, &hit);
         // The volume ray: emission and attenuation of the volumes on [0, nearest surface), so a surface
-        // inside or behind a volume occludes exactly the part of it that lies behind the surface.
-        if (sv.volumes.size > 0 &&
-            !path_add_volume(st, media::integrate_volumes(sv.volumes, ray, 0.0f, found ? hit.t : INFINITY,
-                                                          sampler.next_1d(), false)))
-            break;
+        // inside or behind a volume occludes exactly the part of it that lies behind the surface; with relit
+        // NeRFs, also the free flight through them, which may end the segment at a scattering event.
+        media::FreeFlight flight;
+        if (sv.volumes.size > 0) {
+            const float xi = sampler.next_1d();
+            if (media::any_relit(sv.volumes)) flight.target = media::free_flight_target(sampler.next_1d());
+            if (!path_add_volume(st, media::integrate_volumes(sv.volumes, ray, 0.0f, found ? hit.t : INFINITY,
+                                                              xi, false, &flight)))
+                break;
+        }
         ShadowRequest shadow;
         Ray next;
-        const bool more = path_scatter(sv, tracer, st, ray, found, hit, sampler, ps, &shadow, &next, first);
+        bool more;
+        if (flight.event) {
+            // The path scatters in a relit NeRF at distance flight.t; at the camera vertex that is the film's
+            // first hit (albedo, the facing normal, the distance).
+            const media::RelitEvent ev = media::relit_event_at(sv.volumes, ray, flight);
+            if (st.depth == 0 && first)
+                record_first_event(first, camera_transmittance(st.throughput), ev.sample.albedo, ev.frame.n,
+                                   flight.t);
+            more = relit_scatter(sv, tracer, st, ev, -ray.d, sampler, ps, &shadow, &next);
+        } else {
+            more = path_scatter(sv, tracer, st, ray, found, hit, sampler, ps, &shadow, &next, first);
+        }
         if (shadow.pending) {
             const float t = sv.volumes.size > 0 ? media::integrate_volumes(sv.volumes, shadow.ray, 0.0f, shadow.tmax,
                                                                            shadow.xi, true)

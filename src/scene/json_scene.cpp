@@ -109,7 +109,7 @@ void read_volume(const Reader& r, const json& v, const std::string& field, const
     if (!v.is_object()) r.fail(field, "expected an object {\"file\": ..., \"translation\": ...}");
     r.check_keys(v, field,
                  {"name", "file", "translation", "rotation", "scale", "density_scale", "emission_scale",
-                  "casts_shadows", "step_voxels", "crop"});
+                  "casts_shadows", "step_voxels", "crop", "shading"});
     if (!v.contains("file")) r.fail(field + ".file", "missing");
     VolumeInstance vol;
     vol.name = v.contains("name") ? r.string(v["name"], field + ".name") : field;

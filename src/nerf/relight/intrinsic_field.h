@@ -20,10 +20,6 @@ namespace npt::nerf {
 // (normalised; the raw vector, so that a zero output is no direction at all).
 constexpr int k_intrinsic_outputs = 7;
 constexpr float k_min_roughness = 0.05f;
-// Model units: how far light and continuation rays leave a relit scattering event along its facing normal. The
-// event is drawn inside the density's skin (a few march steps of sqrt(3)/1024 thick on a trained model); starting
-// four steps out keeps the object from shadowing itself through its own skin. The trainer uses the same offset.
-constexpr float k_relit_event_offset = 4.0f * 1.7320508f / 1024.0f;
 
 struct IntrinsicLayout {
     HashGridConfig grid;  // per_level_scale resolved for the model's aabb_scale

@@ -8,7 +8,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 #include "core/srgb.h"
-#include "nerf/relight/intrinsic_field.h"
+#include "nerf/relight/relit_spawn.h"
 #include "nerf/relight/wavefront_march.h"
 
 namespace npt::nerf {
@@ -138,6 +138,7 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
         out.target[j] = p.target;
         out.image[j] = p.image;
     }
+    const float min_step = model.march_params().min_step;
     for (size_t begin = 0; begin < n; begin += k_points_per_round) {
         const size_t end = std::min(n, begin + k_points_per_round);
         std::vector<WaveRay> rays((end - begin) * K);
@@ -145,7 +146,7 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
             Pcg32& rng = rngs[found[j]];
             const Frame frame = Frame::from_z(out.normal[j]);
             const float turn = rng.next_float();
-            const Vec3 origin = out.position[j] + out.normal[j] * k_relit_event_offset;
+            const Vec3 origin = relit_spawn_point(out.position[j], out.normal[j], min_step);
             for (int k = 0; k < K; ++k) {
                 const float z = 1.0f - (float(k) + 0.5f) / float(K);
                 const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));

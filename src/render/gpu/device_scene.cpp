@@ -74,7 +74,7 @@ GridTexture::~GridTexture() {
 DeviceVolumes::DeviceVolumes(Span<const media::VolumeView> host, bool grid_textures) {
     std::vector<media::VolumeView> views(host.data, host.data + host.size);
     // Reserve first: views keep pointers into these buffers, which must not move.
-    m_floats.reserve(2 * views.size());
+    m_floats.reserve(3 * views.size());
     m_colors.reserve(views.size());
     m_bytes.reserve(views.size());
     for (media::VolumeView& v : views) {
@@ -87,6 +87,10 @@ DeviceVolumes::DeviceVolumes(Span<const media::VolumeView> host, bool grid_textu
             v.nerf.occupancy.occupied = m_bytes.back().data();
             v.nerf.occupancy.occupied_bits = nullptr;
             v.nerf.occupancy.coarse_bits = nullptr;
+            if (v.nerf.relit) {  // the intrinsic fields' parameters (a relit model's)
+                m_floats.emplace_back(v.nerf.intrinsic.params, v.nerf.intrinsic.layout.total);
+                v.nerf.intrinsic.params = m_floats.back().data();
+            }
             continue;
         }
         const size_t n = size_t(v.grid.nx) * size_t(v.grid.ny) * size_t(v.grid.nz);
