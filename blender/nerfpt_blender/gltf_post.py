@@ -13,7 +13,7 @@ Y_UP = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0,
 VOLUME_MATERIAL = "volume"  # nerfpt: a primitive with a material of this name is a volume cube
 
 # glTF enums
-_FLOAT, _USHORT = 5126, 5123
+_FLOAT, _USHORT, _UINT = 5126, 5123, 5125
 _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
 
 # A box's 12 triangles, counter-clockwise seen from outside; corner i has x = bit 0, y = bit 1, z = bit 2.
@@ -43,9 +43,68 @@ def to_gltf_point(p):
     return (p[0], p[2], -p[1])
 
 
-def _scene(gltf):
+def scene_of(gltf):
     scenes = gltf.setdefault("scenes", [{"nodes": []}])
     return scenes[gltf.get("scene", 0)]
+
+
+def append_mesh(gltf, data, buffer_index, name, positions, triangles, material):
+    """Appends positions (float32 VEC3) and triangles (uint16 or uint32 indices) to data (a bytearray that
+    becomes buffer buffer_index), with their views, accessors and a one-primitive mesh. Returns the mesh index."""
+    views = gltf.setdefault("bufferViews", [])
+    accessors = gltf.setdefault("accessors", [])
+    meshes = gltf.setdefault("meshes", [])
+    pos_offset = len(data)
+    data += b"".join(struct.pack("<3f", *p) for p in positions)
+    wide = len(positions) > 65535
+    idx_offset = len(data)
+    data += b"".join(struct.pack("<3I" if wide else "<3H", *t) for t in triangles)
+    while len(data) % 4:
+        data += b"\0"
+    views.append(
+        {
+            "buffer": buffer_index,
+            "byteOffset": pos_offset,
+            "byteLength": 12 * len(positions),
+            "target": _ARRAY_BUFFER,
+        }
+    )
+    accessors.append(
+        {
+            "bufferView": len(views) - 1,
+            "componentType": _FLOAT,
+            "count": len(positions),
+            "type": "VEC3",
+            "min": [float(min(p[k] for p in positions)) for k in range(3)],
+            "max": [float(max(p[k] for p in positions)) for k in range(3)],
+        }
+    )
+    pos_accessor = len(accessors) - 1
+    views.append(
+        {
+            "buffer": buffer_index,
+            "byteOffset": idx_offset,
+            "byteLength": (12 if wide else 6) * len(triangles),
+            "target": _ELEMENT_ARRAY_BUFFER,
+        }
+    )
+    accessors.append(
+        {
+            "bufferView": len(views) - 1,
+            "componentType": _UINT if wide else _USHORT,
+            "count": 3 * len(triangles),
+            "type": "SCALAR",
+        }
+    )
+    meshes.append(
+        {
+            "name": name,
+            "primitives": [
+                {"attributes": {"POSITION": pos_accessor}, "indices": len(accessors) - 1, "material": material}
+            ],
+        }
+    )
+    return len(meshes) - 1
 
 
 def add_volume_cubes(gltf, cubes, bin_uri):
@@ -59,74 +118,27 @@ def add_volume_cubes(gltf, cubes, bin_uri):
         materials.append({"name": VOLUME_MATERIAL})
         mat = len(materials) - 1
     buffers = gltf.setdefault("buffers", [])
-    views = gltf.setdefault("bufferViews", [])
-    accessors = gltf.setdefault("accessors", [])
-    meshes = gltf.setdefault("meshes", [])
     nodes = gltf.setdefault("nodes", [])
     buffer_index = len(buffers)
     data = bytearray()
-    index_bytes = b"".join(struct.pack("<3H", *t) for t in _BOX_TRIANGLES)
     for cube in cubes:
         lo, hi = cube["min"], cube["max"]
         corners = [
             (hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1], hi[2] if i & 4 else lo[2])
             for i in range(8)
         ]
-        pos_offset = len(data)
-        data += b"".join(struct.pack("<3f", *c) for c in corners)
-        idx_offset = len(data)
-        data += index_bytes
-        while len(data) % 4:
-            data += b"\0"
-        views.append(
-            {"buffer": buffer_index, "byteOffset": pos_offset, "byteLength": 96, "target": _ARRAY_BUFFER}
+        mesh = append_mesh(
+            gltf, data, buffer_index, cube["name"] + " (nerfpt volume cube)", corners, _BOX_TRIANGLES, mat
         )
-        accessors.append(
-            {
-                "bufferView": len(views) - 1,
-                "componentType": _FLOAT,
-                "count": 8,
-                "type": "VEC3",
-                "min": [float(v) for v in lo],
-                "max": [float(v) for v in hi],
-            }
-        )
-        pos_accessor = len(accessors) - 1
-        views.append(
-            {
-                "buffer": buffer_index,
-                "byteOffset": idx_offset,
-                "byteLength": len(index_bytes),
-                "target": _ELEMENT_ARRAY_BUFFER,
-            }
-        )
-        accessors.append(
-            {"bufferView": len(views) - 1, "componentType": _USHORT, "count": 36, "type": "SCALAR"}
-        )
-        meshes.append(
-            {
-                "name": cube["name"] + " (nerfpt volume cube)",
-                "primitives": [
-                    {"attributes": {"POSITION": pos_accessor}, "indices": len(accessors) - 1, "material": mat}
-                ],
-            }
-        )
-        nodes.append(
-            {
-                "name": cube["name"],
-                "mesh": len(meshes) - 1,
-                "matrix": cube["matrix"],
-                "extras": cube["extras"],
-            }
-        )
-        _scene(gltf).setdefault("nodes", []).append(len(nodes) - 1)
+        nodes.append({"name": cube["name"], "mesh": mesh, "matrix": cube["matrix"], "extras": cube["extras"]})
+        scene_of(gltf).setdefault("nodes", []).append(len(nodes) - 1)
     buffers.append({"byteLength": len(data), "uri": bin_uri})
     return bytes(data)
 
 
 def set_scene_extras(gltf, **settings):
     """Render settings nerfpt reads from the scene's extras (width, height, spp, max_depth, background)."""
-    _scene(gltf).setdefault("extras", {}).update(settings)
+    scene_of(gltf).setdefault("extras", {}).update(settings)
 
 
 def material_index(gltf, name):
@@ -154,12 +166,18 @@ def replace_material(gltf, index, material):
         use_extension(gltf, ext)
 
 
-def no_specular_when_black(material):
-    """Principled Specular 0 comes out of Blender's exporter as specularColorFactor 0 (F0 = 0), which still
-    leaves Schlick's grazing term (1 - cos)^5; specularFactor 0 removes the layer, as Blender does."""
-    spec = material.get("extensions", {}).get("KHR_materials_specular")
-    if spec is not None and spec.get("specularColorFactor") == [0.0, 0.0, 0.0]:
-        spec["specularFactor"] = 0.0
+def cycles_specular_layer(gltf, material, specular, metallic, transmission):
+    """Makes a Principled material's KHR_materials_specular say what Cycles 3.x renders (docs/blender.md,
+    "Specular"). Cycles' Principled reflects F = F0 + (1 - F0) FH(cos), F0 = 0.08 Specular (tinted) on the
+    dielectric part, F90 = 1 for any Specular > 0; at Specular 0 with no metal (and no glass, whose reflection
+    is a separate closure) Cycles makes no specular layer at all. glTF's F = specularFactor (F0' + (1 - F0')
+    Schlick), F0' = specularColorFactor F0(ior): Blender's exporter writes F0' = 0.08 Specular and leaves
+    specularFactor 1, right except where Cycles has no layer, whose F90 must be 0 too: specularFactor 0.
+    specular, metallic, transmission: the node's unlinked values, None when linked (then nothing changes)."""
+    if specular != 0.0 or metallic != 0.0 or transmission != 0.0:
+        return
+    material.setdefault("extensions", {}).setdefault("KHR_materials_specular", {})["specularFactor"] = 0.0
+    use_extension(gltf, "KHR_materials_specular")
 
 
 def lambert(color):
