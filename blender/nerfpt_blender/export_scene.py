@@ -379,7 +379,6 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
                     gltf,
                     m,
                     _unlinked(principled, "Specular"),
-                    _unlinked(principled, "Metallic"),
                     _unlinked(principled, "Transmission"),
                 )
         notes += [f"material '{mat.name}': {n}" for n in mat_notes]

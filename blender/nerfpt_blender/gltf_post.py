@@ -6,6 +6,7 @@ matrix Y_UP below, and gives nodes C M C^-1. A volume cube's node gets Y_UP @ M_
 stay Blender's, because a grid's (and a model's) coordinates are the Blender object's local coordinates.
 """
 
+import math
 import struct
 
 Y_UP = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
@@ -166,17 +167,48 @@ def replace_material(gltf, index, material):
         use_extension(gltf, ext)
 
 
-def cycles_specular_layer(gltf, material, specular, metallic, transmission):
-    """Makes a Principled material's KHR_materials_specular say what Cycles 3.x renders (docs/blender.md,
-    "Specular"). Cycles' Principled reflects F = F0 + (1 - F0) FH(cos), F0 = 0.08 Specular (tinted) on the
-    dielectric part, F90 = 1 for any Specular > 0; at Specular 0 with no metal (and no glass, whose reflection
-    is a separate closure) Cycles makes no specular layer at all. glTF's F = specularFactor (F0' + (1 - F0')
-    Schlick), F0' = specularColorFactor F0(ior): Blender's exporter writes F0' = 0.08 Specular and leaves
-    specularFactor 1, right except where Cycles has no layer, whose F90 must be 0 too: specularFactor 0.
-    specular, metallic, transmission: the node's unlinked values, None when linked (then nothing changes)."""
-    if specular != 0.0 or metallic != 0.0 or transmission != 0.0:
+def _fresnel_dielectric(c, eta):
+    s2 = (1.0 - c * c) / (eta * eta)
+    if s2 >= 1.0:
+        return 1.0
+    ct = math.sqrt(1.0 - s2)
+    rp = (eta * c - ct) / (eta * c + ct)
+    rs = (c - eta * ct) / (c + eta * ct)
+    return 0.5 * (rp * rp + rs * rs)
+
+
+def cycles_specular_factor(specular):
+    """glTF specularFactor for Blender 3.x's Principled Specular (docs/blender.md, "Specular").
+    Cycles reflects with the exact dielectric Fresnel of the index eta whose F0 is 0.08 Specular; glTF with
+    specularFactor (F0' + (1 - F0') (1 - cos)^5). F0 = specularFactor F0' matches through specularColorFactor;
+    specularFactor is chosen so that the cosine-weighted hemispherical averages match too (what a white
+    furnace sees): sf = 21 Favg(eta) - 20 F0, below 1 for Specular < 0.27 and 0 at Specular 0 (Cycles then has
+    no reflection at all); above, Schlick's average is the smaller one and 1 is the closest glTF allows."""
+    if specular <= 0.0:
+        return 0.0
+    f0 = 0.08 * min(specular, 1.0)
+    q = math.sqrt(f0)
+    eta = (1.0 + q) / (1.0 - q)
+    n = 512
+    avg = 2.0 * sum(_fresnel_dielectric((i + 0.5) / n, eta) * (i + 0.5) / n for i in range(n)) / n
+    return max(0.0, min(1.0, 21.0 * avg - 20.0 * f0))
+
+
+def cycles_specular_layer(gltf, material, specular, transmission):
+    """Makes a Principled material's KHR_materials_specular say what Cycles 3.x renders: Blender's exporter
+    writes specularColorFactor for F0 = 0.08 Specular and leaves specularFactor 1 (at Specular 0: F0 = 0 and a
+    full grazing layer, where Cycles reflects nothing). Scales the layer by cycles_specular_factor (blended
+    with 1, the glass's own Fresnel, by Transmission) and divides specularColorFactor by the same factor so
+    that F0 stays. specular, transmission: the node's unlinked values, None when linked (nothing changes)."""
+    if specular is None or transmission is None:
         return
-    material.setdefault("extensions", {}).setdefault("KHR_materials_specular", {})["specularFactor"] = 0.0
+    factor = (1.0 - transmission) * cycles_specular_factor(specular) + transmission
+    if factor >= 1.0:
+        return
+    spec = material.setdefault("extensions", {}).setdefault("KHR_materials_specular", {})
+    spec["specularFactor"] = factor
+    if factor > 0.0 and "specularColorFactor" in spec:
+        spec["specularColorFactor"] = [c / factor for c in spec["specularColorFactor"]]
     use_extension(gltf, "KHR_materials_specular")
 
 

@@ -273,22 +273,43 @@ class Gltf(unittest.TestCase):
         self.assertEqual(g["scenes"][0]["extras"], {"width": 8, "spp": 4})
 
     def test_specular_layer(self):
-        """Cycles has no specular layer only at Specular 0 with no metal and no glass (docs/blender.md)."""
+        """docs/blender.md, "Specular": F0 = 0.08 Specular kept, the layer scaled where Cycles' exact Fresnel of a
+        low index reflects less on average than Schlick's."""
+        self.assertEqual(gltf_post.cycles_specular_factor(0.0), 0.0)
+        for s in (0.3, 0.5, 1.0):
+            self.assertEqual(gltf_post.cycles_specular_factor(s), 1.0)
+        # Exact Fresnel of eta = 1.0582 (F0 = 0.0008): cosine-weighted average 0.01586, by a finer integral.
+        eta, n = (1 + math.sqrt(0.0008)) / (1 - math.sqrt(0.0008)), 100000
+        avg = 2 * sum(gltf_post._fresnel_dielectric((i + 0.5) / n, eta) * (i + 0.5) / n for i in range(n)) / n
+        sf = gltf_post.cycles_specular_factor(0.01)
+        self.assertAlmostEqual(sf, 21 * avg - 20 * 0.0008, places=4)
+        self.assertAlmostEqual(sf * (0.0008 / sf + (1 - 0.0008 / sf) / 21), avg, places=4)  # averages agree
+        factors = [gltf_post.cycles_specular_factor(i / 100) for i in range(31)]
+        self.assertEqual(factors, sorted(factors))  # continuous from 0, increasing
         g = {}
-        # Specular 0: the exporter's specularColorFactor 0 alone leaves F90 = 1; specularFactor 0 removes it.
+        # Specular 0: the exporter's specularColorFactor 0 alone leaves a full grazing layer; Cycles has none.
         black = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [0.0, 0.0, 0.0]}}}
-        gltf_post.cycles_specular_layer(g, black, 0.0, 0.0, 0.0)
+        gltf_post.cycles_specular_layer(g, black, 0.0, 0.0)
         self.assertEqual(black["extensions"]["KHR_materials_specular"]["specularFactor"], 0.0)
         self.assertIn("KHR_materials_specular", g["extensionsUsed"])
-        bare = {}  # an exporter that wrote no extension
-        gltf_post.cycles_specular_layer(g, bare, 0.0, 0.0, 0.0)
+        bare = {}  # no extension written
+        gltf_post.cycles_specular_layer(g, bare, 0.0, 0.0)
         self.assertEqual(bare["extensions"]["KHR_materials_specular"], {"specularFactor": 0.0})
-        # Any Specular > 0, any metal, any glass, or a linked input: Cycles' layer has F90 = 1; as exported.
-        for s, m, t in ((0.01, 0.0, 0.0), (0.5, 0.0, 0.0), (0.0, 0.3, 0.0), (0.0, 0.0, 1.0), (None, 0.0, 0.0),
-                        (0.0, None, 0.0), (0.0, 0.0, None)):  # fmt: skip
+        # Specular 0.01: the layer scaled by sf, the colour factor by 1/sf, so F0 = sf x colour stays.
+        low = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [0.02, 0.02, 0.01]}}}
+        gltf_post.cycles_specular_layer(g, low, 0.01, 0.0)
+        ext = low["extensions"]["KHR_materials_specular"]
+        self.assertAlmostEqual(ext["specularFactor"], sf)
+        self.assertAlmostEqual(ext["specularColorFactor"][2] * sf, 0.01)
+        # Glass keeps its own Fresnel: half transmission halves the scaling.
+        half = {}
+        gltf_post.cycles_specular_layer(g, half, 0.0, 0.5)
+        self.assertEqual(half["extensions"]["KHR_materials_specular"]["specularFactor"], 0.5)
+        # Specular >= 0.3, full glass, or a linked input: as exported.
+        for s, t in ((0.3, 0.0), (1.0, 0.0), (0.0, 1.0), (None, 0.0), (0.0, None)):
             mat = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [0.2, 0.2, 0.2]}}}
-            gltf_post.cycles_specular_layer({}, mat, s, m, t)
-            self.assertNotIn("specularFactor", mat["extensions"]["KHR_materials_specular"], (s, m, t))
+            gltf_post.cycles_specular_layer({}, mat, s, t)
+            self.assertEqual(mat["extensions"]["KHR_materials_specular"], {"specularColorFactor": [0.2, 0.2, 0.2]})
 
 
 class AreaLights(unittest.TestCase):
