@@ -290,7 +290,7 @@ def compare_within_noise(a, out, tag):
     c, d: Cycles), m = (a + b)/2, r = (c + d)/2, w = 1/(r^2 + 0.01) (nerfpt compare's weight):
     e = (m - r)^2 w - (a - b)^2 w/4 - (c - d)^2 w/4 has expectation bias^2 w; mean(e) must be <= 4 standard
     errors, and each channel's image mean within 4 combined standard errors. `nerfpt compare m r` must print
-    the relative MSE computed here. Returns (failures, m, r)."""
+    the relative MSE computed here. Returns (failures, m, r, the relMSE the noise explains)."""
     import numpy as np
 
     na, nb = out[("NERFPT", 1)], out[("NERFPT", 2)]
@@ -327,4 +327,4 @@ def compare_within_noise(a, out, tag):
         )
         if abs(mn - mc) > lim:
             failures.append(f"{tag}: mean {name} differs by {mn - mc:+.3g} > {lim:.3g}")
-    return failures, m, r
+    return failures, m, r, noise

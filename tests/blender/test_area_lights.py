@@ -77,7 +77,7 @@ info = h.nerfpt(a, "info", gltf_path).stdout
 h.log("nerfpt info scene.gltf:\n" + info.rstrip())
 
 out = h.render_halves(a, "area", a.spp)
-failures, m, r = h.compare_within_noise(a, out, "area")
+failures, m, r, _ = h.compare_within_noise(a, out, "area")
 for name, px in (("cycles", r), ("nerfpt", m)):
     h.save_png(px, os.path.join(a.work, f"area_{name}.png"))
 h.log(f"area lights: whole test {time.time() - t_start:.0f} s")
