@@ -150,9 +150,9 @@ def build_room(width, height):
     green = _material("green", (0.14, 0.45, 0.091))
     lamp = _material("lamp", emission=((1.0, 0.85, 0.6), 12.0))
     _quad("floor", [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], white)
-    # The ceiling has a hole the lamp fills exactly: nothing lies above the lamp's plane. (nerfpt 0.1.0 lights
-    # points above an emitter's plane too dimly: a lamp 2 cm below a full ceiling, whose top face lights the
-    # ceiling as Cycles' two-sided Emission does, made nerfpt's room 1.3% darker than Cycles'.)
+    # The ceiling has a hole the lamp fills exactly: nothing lies above the lamp's plane. (nerfpt 0.1.0 lost
+    # the light of emitters seen near their plane: a lamp 2 cm below a full ceiling made its room 1.3% darker
+    # than Cycles'. Fixed since (shadow rays aimed from their offset origin); the room keeps its shape.)
     for i, (x0, x1, y0, y1) in enumerate(
         [(-1, 1, -1, -0.3), (-1, 1, 0.3, 1), (-1, -0.3, -0.3, 0.3), (0.3, 1, -0.3, 0.3)]
     ):
