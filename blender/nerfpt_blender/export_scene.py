@@ -1,6 +1,7 @@
 """A Blender scene as a glTF that nerfpt renders: Blender's glTF exporter (extras, cameras, punctual lights,
-modifiers applied), then the add-on's additions (gltf_post): a `volume` cube per capture object, materials the
-exporter cannot map (Diffuse, Glossy, Glass, Emission shaders), the render settings and the world colour as scene
+modifiers applied), then the add-on's additions (gltf_post, area_lights): a `volume` cube per capture object, a
+one-sided emissive polygon per area light, materials the exporter cannot map (Diffuse, Glossy, Glass, Emission
+shaders), the Principled specular layer as Cycles renders it, the render settings and the world colour as scene
 extras. Everything nerfpt would not render as Cycles does is collected as one list of warnings
 (docs/blender.md has the mapping table).
 """
