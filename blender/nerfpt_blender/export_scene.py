@@ -1,6 +1,7 @@
 """A Blender scene as a glTF that nerfpt renders: Blender's glTF exporter (extras, cameras, punctual lights,
-modifiers applied), then the add-on's additions (gltf_post): a `volume` cube per capture object, materials the
-exporter cannot map (Diffuse, Glossy, Glass, Emission shaders), the render settings and the world colour as scene
+modifiers applied), then the add-on's additions (gltf_post, area_lights): a `volume` cube per capture object, a
+one-sided emissive polygon per area light, materials the exporter cannot map (Diffuse, Glossy, Glass, Emission
+shaders), the Principled specular layer as Cycles renders it, the render settings and the world colour as scene
 extras. Everything nerfpt would not render as Cycles does is collected as one list of warnings
 (docs/blender.md has the mapping table).
 """
@@ -10,12 +11,13 @@ import math
 import os
 
 import bpy
-from mathutils import Matrix
+from mathutils import Matrix, Vector
 
-from . import gltf_post
+from . import area_lights, gltf_post
 from .nerfpt_cli import NerfptError, ignored_report
 
 CUBE_BIN = "nerfpt_volumes.bin"
+AREA_LIGHT_BIN = "nerfpt_area_lights.bin"
 
 # Principled BSDF inputs nerfpt ignores, with the value at which they do nothing (3.x and 4.x names).
 _IGNORED_PRINCIPLED = [
@@ -144,6 +146,21 @@ def map_material(mat, notes):
     return None
 
 
+def _principled(mat):
+    """The Principled BSDF node a material's active output renders, or None."""
+    if not mat.use_nodes or mat.node_tree is None:
+        return None
+    out = _active_output(mat)
+    shader = _linked_shader(out.inputs["Surface"]) if out is not None else None
+    return shader if shader is not None and shader.type == "BSDF_PRINCIPLED" else None
+
+
+def _unlinked(node, name):
+    """A socket's value, or None when it is linked (or missing)."""
+    s = node.inputs.get(name)
+    return None if s is None or s.is_linked else float(s.default_value)
+
+
 def _world_background(world, notes):
     """Constant linear RGB radiance of the world, which nerfpt sees where rays leave the scene."""
     if world is None:
@@ -205,6 +222,61 @@ def _volume_extras(obj, world, gltf_dir, absolute_paths, notes):
     return {"volume": volume}
 
 
+def _exported_area_light(obj):
+    """Area lights become emitters unless they emit nothing (a portal, no power)."""
+    light = obj.data
+    return not getattr(getattr(light, "cycles", None), "is_portal", False) and light.energy > 0.0
+
+
+def _camera_sees(scene, camera, points, facing):
+    """Whether the camera may see points' polygon from its emitting side (facing: the emission direction).
+    Conservative: a polygon partly behind the camera counts as seen."""
+    from bpy_extras.object_utils import world_to_camera_view
+
+    eye = camera.matrix_world.translation
+    centre = sum(points, Vector()) / len(points)
+    if (eye - centre).dot(facing) <= 0.0:
+        return False
+    ndc = [world_to_camera_view(scene, camera, p) for p in points]
+    if any(v.z <= 0.0 for v in ndc):
+        return True
+    xs, ys = [v.x for v in ndc], [v.y for v in ndc]
+    return max(xs) >= 0.0 and min(xs) <= 1.0 and max(ys) >= 0.0 and min(ys) <= 1.0
+
+
+def _area_light_notes(scene, obj, camera, notes):
+    """What of an area light the emissive polygon does not carry."""
+    light = obj.data
+    name = f"area light '{obj.name}'"
+    if not _exported_area_light(obj):
+        if light.energy > 0.0:
+            notes.append(f"{name} is a portal: not exported")
+        return
+    spread = getattr(light, "spread", area_lights.FULL_SPREAD)
+    if spread < area_lights.FULL_SPREAD - 1e-4:
+        notes.append(f"{name}: spread {math.degrees(spread):.0f} deg is rendered as 180 deg")
+    if light.use_nodes:
+        notes.append(f"{name}: its node tree is ignored (colour x power is used)")
+    cycles = getattr(light, "cycles", None)
+    if cycles is not None and not getattr(cycles, "cast_shadow", True):
+        notes.append(f"{name}: 'cast shadow' off is ignored (nerfpt's emitters always cast shadows)")
+    hidden = [
+        ray
+        for ray in ("diffuse", "glossy", "transmission", "volume_scatter")
+        if not getattr(obj, f"visible_{ray}", True)
+    ]
+    if hidden:
+        notes.append(f"{name}: its ray visibility ({', '.join(hidden)} off) is ignored")
+    if camera is not None and not getattr(obj, "visible_camera", True):
+        world = obj.matrix_world
+        points, _ = area_lights.emitter_mesh(light.shape, light.size, light.size_y, [list(r) for r in world])
+        facing = -(world.to_3x3() @ Vector((0.0, 0.0, 1.0)))
+        if _camera_sees(scene, camera, [Vector(p) for p in points], facing):
+            notes.append(
+                f"{name} is in view: nerfpt's camera sees it (Cycles' does not: Object > Visibility > Camera)"
+            )
+
+
 def _check_scene(scene, view_layer, camera, notes):
     r = scene.render
     if r.use_border:
@@ -231,7 +303,7 @@ def _check_scene(scene, view_layer, camera, notes):
         if obj.type == "LIGHT":
             light = obj.data
             if light.type == "AREA":
-                notes.append(f"area light '{obj.name}' is not exported (use an emissive mesh)")
+                _area_light_notes(scene, obj, camera, notes)
             elif getattr(light, "shadow_soft_size", 0) > 0 and light.type in ("POINT", "SPOT"):
                 notes.append(f"light '{obj.name}': its radius is ignored (a point light: hard shadows)")
             elif light.type == "SUN" and light.angle > 0:
@@ -302,7 +374,14 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
         if mapped is not None:
             gltf_post.replace_material(gltf, i, mapped)
         else:
-            gltf_post.no_specular_when_black(m)
+            principled = _principled(mat)
+            if principled is not None and principled.inputs.get("Specular") is not None:  # Blender 3.x
+                gltf_post.cycles_specular_layer(
+                    gltf,
+                    m,
+                    _unlinked(principled, "Specular"),
+                    _unlinked(principled, "Transmission"),
+                )
         notes += [f"material '{mat.name}': {n}" for n in mat_notes]
 
     # The captures' volume cubes.
@@ -325,6 +404,30 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
     data = gltf_post.add_volume_cubes(gltf, cubes, CUBE_BIN)
     if data:
         with open(os.path.join(gltf_dir, CUBE_BIN), "wb") as f:
+            f.write(data)
+
+    # Area lights as one-sided emissive polygons (area_lights).
+    emitters = []
+    for obj in scene.objects:
+        if obj.type != "LIGHT" or obj.data.type != "AREA" or not renders(obj, view_layer):
+            continue
+        if not _exported_area_light(obj):
+            continue
+        light = obj.data
+        emitters.append(
+            {
+                "name": obj.name,
+                "shape": light.shape,
+                "size_x": light.size,
+                "size_y": light.size_y,
+                "world": [list(r) for r in obj.evaluated_get(depsgraph).matrix_world],
+                "color": list(light.color),
+                "power": light.energy,
+            }
+        )
+    data = area_lights.add_emitters(gltf, emitters, AREA_LIGHT_BIN)
+    if data:
+        with open(os.path.join(gltf_dir, AREA_LIGHT_BIN), "wb") as f:
             f.write(data)
 
     r = scene.render

@@ -6,6 +6,7 @@ matrix Y_UP below, and gives nodes C M C^-1. A volume cube's node gets Y_UP @ M_
 stay Blender's, because a grid's (and a model's) coordinates are the Blender object's local coordinates.
 """
 
+import math
 import struct
 
 Y_UP = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
@@ -13,7 +14,7 @@ Y_UP = [[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0,
 VOLUME_MATERIAL = "volume"  # nerfpt: a primitive with a material of this name is a volume cube
 
 # glTF enums
-_FLOAT, _USHORT = 5126, 5123
+_FLOAT, _USHORT, _UINT = 5126, 5123, 5125
 _ARRAY_BUFFER, _ELEMENT_ARRAY_BUFFER = 34962, 34963
 
 # A box's 12 triangles, counter-clockwise seen from outside; corner i has x = bit 0, y = bit 1, z = bit 2.
@@ -43,9 +44,68 @@ def to_gltf_point(p):
     return (p[0], p[2], -p[1])
 
 
-def _scene(gltf):
+def scene_of(gltf):
     scenes = gltf.setdefault("scenes", [{"nodes": []}])
     return scenes[gltf.get("scene", 0)]
+
+
+def append_mesh(gltf, data, buffer_index, name, positions, triangles, material):
+    """Appends positions (float32 VEC3) and triangles (uint16 or uint32 indices) to data (a bytearray that
+    becomes buffer buffer_index), with their views, accessors and a one-primitive mesh. Returns the mesh index."""
+    views = gltf.setdefault("bufferViews", [])
+    accessors = gltf.setdefault("accessors", [])
+    meshes = gltf.setdefault("meshes", [])
+    pos_offset = len(data)
+    data += b"".join(struct.pack("<3f", *p) for p in positions)
+    wide = len(positions) > 65535
+    idx_offset = len(data)
+    data += b"".join(struct.pack("<3I" if wide else "<3H", *t) for t in triangles)
+    while len(data) % 4:
+        data += b"\0"
+    views.append(
+        {
+            "buffer": buffer_index,
+            "byteOffset": pos_offset,
+            "byteLength": 12 * len(positions),
+            "target": _ARRAY_BUFFER,
+        }
+    )
+    accessors.append(
+        {
+            "bufferView": len(views) - 1,
+            "componentType": _FLOAT,
+            "count": len(positions),
+            "type": "VEC3",
+            "min": [float(min(p[k] for p in positions)) for k in range(3)],
+            "max": [float(max(p[k] for p in positions)) for k in range(3)],
+        }
+    )
+    pos_accessor = len(accessors) - 1
+    views.append(
+        {
+            "buffer": buffer_index,
+            "byteOffset": idx_offset,
+            "byteLength": (12 if wide else 6) * len(triangles),
+            "target": _ELEMENT_ARRAY_BUFFER,
+        }
+    )
+    accessors.append(
+        {
+            "bufferView": len(views) - 1,
+            "componentType": _UINT if wide else _USHORT,
+            "count": 3 * len(triangles),
+            "type": "SCALAR",
+        }
+    )
+    meshes.append(
+        {
+            "name": name,
+            "primitives": [
+                {"attributes": {"POSITION": pos_accessor}, "indices": len(accessors) - 1, "material": material}
+            ],
+        }
+    )
+    return len(meshes) - 1
 
 
 def add_volume_cubes(gltf, cubes, bin_uri):
@@ -59,74 +119,27 @@ def add_volume_cubes(gltf, cubes, bin_uri):
         materials.append({"name": VOLUME_MATERIAL})
         mat = len(materials) - 1
     buffers = gltf.setdefault("buffers", [])
-    views = gltf.setdefault("bufferViews", [])
-    accessors = gltf.setdefault("accessors", [])
-    meshes = gltf.setdefault("meshes", [])
     nodes = gltf.setdefault("nodes", [])
     buffer_index = len(buffers)
     data = bytearray()
-    index_bytes = b"".join(struct.pack("<3H", *t) for t in _BOX_TRIANGLES)
     for cube in cubes:
         lo, hi = cube["min"], cube["max"]
         corners = [
             (hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1], hi[2] if i & 4 else lo[2])
             for i in range(8)
         ]
-        pos_offset = len(data)
-        data += b"".join(struct.pack("<3f", *c) for c in corners)
-        idx_offset = len(data)
-        data += index_bytes
-        while len(data) % 4:
-            data += b"\0"
-        views.append(
-            {"buffer": buffer_index, "byteOffset": pos_offset, "byteLength": 96, "target": _ARRAY_BUFFER}
+        mesh = append_mesh(
+            gltf, data, buffer_index, cube["name"] + " (nerfpt volume cube)", corners, _BOX_TRIANGLES, mat
         )
-        accessors.append(
-            {
-                "bufferView": len(views) - 1,
-                "componentType": _FLOAT,
-                "count": 8,
-                "type": "VEC3",
-                "min": [float(v) for v in lo],
-                "max": [float(v) for v in hi],
-            }
-        )
-        pos_accessor = len(accessors) - 1
-        views.append(
-            {
-                "buffer": buffer_index,
-                "byteOffset": idx_offset,
-                "byteLength": len(index_bytes),
-                "target": _ELEMENT_ARRAY_BUFFER,
-            }
-        )
-        accessors.append(
-            {"bufferView": len(views) - 1, "componentType": _USHORT, "count": 36, "type": "SCALAR"}
-        )
-        meshes.append(
-            {
-                "name": cube["name"] + " (nerfpt volume cube)",
-                "primitives": [
-                    {"attributes": {"POSITION": pos_accessor}, "indices": len(accessors) - 1, "material": mat}
-                ],
-            }
-        )
-        nodes.append(
-            {
-                "name": cube["name"],
-                "mesh": len(meshes) - 1,
-                "matrix": cube["matrix"],
-                "extras": cube["extras"],
-            }
-        )
-        _scene(gltf).setdefault("nodes", []).append(len(nodes) - 1)
+        nodes.append({"name": cube["name"], "mesh": mesh, "matrix": cube["matrix"], "extras": cube["extras"]})
+        scene_of(gltf).setdefault("nodes", []).append(len(nodes) - 1)
     buffers.append({"byteLength": len(data), "uri": bin_uri})
     return bytes(data)
 
 
 def set_scene_extras(gltf, **settings):
     """Render settings nerfpt reads from the scene's extras (width, height, spp, max_depth, background)."""
-    _scene(gltf).setdefault("extras", {}).update(settings)
+    scene_of(gltf).setdefault("extras", {}).update(settings)
 
 
 def material_index(gltf, name):
@@ -154,12 +167,49 @@ def replace_material(gltf, index, material):
         use_extension(gltf, ext)
 
 
-def no_specular_when_black(material):
-    """Principled Specular 0 comes out of Blender's exporter as specularColorFactor 0 (F0 = 0), which still
-    leaves Schlick's grazing term (1 - cos)^5; specularFactor 0 removes the layer, as Blender does."""
-    spec = material.get("extensions", {}).get("KHR_materials_specular")
-    if spec is not None and spec.get("specularColorFactor") == [0.0, 0.0, 0.0]:
-        spec["specularFactor"] = 0.0
+def _fresnel_dielectric(c, eta):
+    s2 = (1.0 - c * c) / (eta * eta)
+    if s2 >= 1.0:
+        return 1.0
+    ct = math.sqrt(1.0 - s2)
+    rp = (eta * c - ct) / (eta * c + ct)
+    rs = (c - eta * ct) / (c + eta * ct)
+    return 0.5 * (rp * rp + rs * rs)
+
+
+def cycles_specular_factor(specular):
+    """glTF specularFactor for Blender 3.x's Principled Specular (docs/blender.md, "Specular").
+    Cycles reflects with the exact dielectric Fresnel of the index eta whose F0 is 0.08 Specular; glTF with
+    specularFactor (F0' + (1 - F0') (1 - cos)^5). F0 = specularFactor F0' matches through specularColorFactor;
+    specularFactor is chosen so that the cosine-weighted hemispherical averages match too (what a white
+    furnace sees): sf = 21 Favg(eta) - 20 F0, below 1 for Specular < 0.27 and 0 at Specular 0 (Cycles then has
+    no reflection at all); above, Schlick's average is the smaller one and 1 is the closest glTF allows."""
+    if specular <= 0.0:
+        return 0.0
+    f0 = 0.08 * min(specular, 1.0)
+    q = math.sqrt(f0)
+    eta = (1.0 + q) / (1.0 - q)
+    n = 512
+    avg = 2.0 * sum(_fresnel_dielectric((i + 0.5) / n, eta) * (i + 0.5) / n for i in range(n)) / n
+    return max(0.0, min(1.0, 21.0 * avg - 20.0 * f0))
+
+
+def cycles_specular_layer(gltf, material, specular, transmission):
+    """Makes a Principled material's KHR_materials_specular say what Cycles 3.x renders: Blender's exporter
+    writes specularColorFactor for F0 = 0.08 Specular and leaves specularFactor 1 (at Specular 0: F0 = 0 and a
+    full grazing layer, where Cycles reflects nothing). Scales the layer by cycles_specular_factor (blended
+    with 1, the glass's own Fresnel, by Transmission) and divides specularColorFactor by the same factor so
+    that F0 stays. specular, transmission: the node's unlinked values, None when linked (nothing changes)."""
+    if specular is None or transmission is None:
+        return
+    factor = (1.0 - transmission) * cycles_specular_factor(specular) + transmission
+    if factor >= 1.0:
+        return
+    spec = material.setdefault("extensions", {}).setdefault("KHR_materials_specular", {})
+    spec["specularFactor"] = factor
+    if factor > 0.0 and "specularColorFactor" in spec:
+        spec["specularColorFactor"] = [c / factor for c in spec["specularColorFactor"]]
+    use_extension(gltf, "KHR_materials_specular")
 
 
 def lambert(color):

@@ -131,7 +131,17 @@ NPT_HD NPT_DEVICE_NOINLINE bool path_scatter(const SceneView& sv, const Tracer& 
             Rgb f = materials::bsdf_eval(bsdf, wo, wi) * fabsf(wi.z);
             if (!is_black(f) && geometry_agrees(si, wo_world, ls.wi)) {
                 Ray sray = spawn_ray(si, ls.wi);
-                float tmax = isinf(ls.distance) ? INFINITY : ls.distance * (1.0f - 1e-4f);
+                float tmax = INFINITY;
+                if (!isinf(ls.distance)) {
+                    // Aim from the offset origin at the sampled point itself. A ray parallel to wi from the
+                    // offset origin meets an emitter seen at a grazing angle (cosine c) up to offset / c
+                    // before ls.distance, beyond the margin below: the emitter shadowed itself wherever it
+                    // was seen within ~2.5 degrees of its plane.
+                    Vec3 to = si.p + ls.wi * ls.distance - sray.o;
+                    float d = length(to);
+                    if (d > 0.0f) sray.d = to / d;
+                    tmax = d * (1.0f - 1e-4f);
+                }
                 // Shadow rays see the volumes' transmittance (no emission: the volume does not scatter).
                 if (!tracer.occluded(sray, tmax)) {
                     float w = ls.is_delta || ps.strategy == LightStrategy::LightOnly

@@ -1,10 +1,11 @@
 """Unit tests of the add-on's modules that need no Blender (plain python3): reading nerfpt's output, the
-child process and its cancel, the model file header and placement, the glTF additions, the main-thread queue.
+child process and its cancel, the model file header and placement, the glTF additions (area lights, the specular layer), the main-thread queue.
 
 python3 tests/blender/test_pure.py BUILD_DIR   (BUILD_DIR/nerfpt is used where a real binary is needed)
 """
 
 import json
+import math
 import os
 import stat
 import struct
@@ -15,7 +16,7 @@ import time
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "blender"))
-from nerfpt_blender import child_process, gltf_post, main_thread, model_file, nerfpt_cli  # noqa: E402
+from nerfpt_blender import area_lights, child_process, gltf_post, main_thread, model_file, nerfpt_cli  # noqa: E402
 
 BUILD = os.path.abspath(sys.argv.pop(1)) if len(sys.argv) > 1 else ""
 
@@ -268,14 +269,116 @@ class Gltf(unittest.TestCase):
         e = gltf_post.emitter([2.0, 1.0, 0.0], 5.0)
         self.assertEqual(e["emissiveFactor"], [1.0, 0.5, 0.0])
         self.assertEqual(e["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"], 10.0)
-        principled = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [0.0, 0.0, 0.0]}}}
-        gltf_post.no_specular_when_black(principled)
-        self.assertEqual(principled["extensions"]["KHR_materials_specular"]["specularFactor"], 0.0)
-        tinted = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [1.2, 1.2, 1.2]}}}
-        gltf_post.no_specular_when_black(tinted)
-        self.assertNotIn("specularFactor", tinted["extensions"]["KHR_materials_specular"])
         gltf_post.set_scene_extras(g, width=8, spp=4)
         self.assertEqual(g["scenes"][0]["extras"], {"width": 8, "spp": 4})
+
+    def test_specular_layer(self):
+        """docs/blender.md, "Specular": F0 = 0.08 Specular kept, the layer scaled where Cycles' exact Fresnel of a
+        low index reflects less on average than Schlick's."""
+        self.assertEqual(gltf_post.cycles_specular_factor(0.0), 0.0)
+        for s in (0.3, 0.5, 1.0):
+            self.assertEqual(gltf_post.cycles_specular_factor(s), 1.0)
+        # Exact Fresnel of eta = 1.0582 (F0 = 0.0008): cosine-weighted average 0.01586, by a finer integral.
+        eta, n = (1 + math.sqrt(0.0008)) / (1 - math.sqrt(0.0008)), 100000
+        avg = 2 * sum(gltf_post._fresnel_dielectric((i + 0.5) / n, eta) * (i + 0.5) / n for i in range(n)) / n
+        sf = gltf_post.cycles_specular_factor(0.01)
+        self.assertAlmostEqual(sf, 21 * avg - 20 * 0.0008, places=4)
+        self.assertAlmostEqual(sf * (0.0008 / sf + (1 - 0.0008 / sf) / 21), avg, places=4)  # averages agree
+        factors = [gltf_post.cycles_specular_factor(i / 100) for i in range(31)]
+        self.assertEqual(factors, sorted(factors))  # continuous from 0, increasing
+        g = {}
+        # Specular 0: the exporter's specularColorFactor 0 alone leaves a full grazing layer; Cycles has none.
+        black = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [0.0, 0.0, 0.0]}}}
+        gltf_post.cycles_specular_layer(g, black, 0.0, 0.0)
+        self.assertEqual(black["extensions"]["KHR_materials_specular"]["specularFactor"], 0.0)
+        self.assertIn("KHR_materials_specular", g["extensionsUsed"])
+        bare = {}  # no extension written
+        gltf_post.cycles_specular_layer(g, bare, 0.0, 0.0)
+        self.assertEqual(bare["extensions"]["KHR_materials_specular"], {"specularFactor": 0.0})
+        # Specular 0.01: the layer scaled by sf, the colour factor by 1/sf, so F0 = sf x colour stays.
+        low = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [0.02, 0.02, 0.01]}}}
+        gltf_post.cycles_specular_layer(g, low, 0.01, 0.0)
+        ext = low["extensions"]["KHR_materials_specular"]
+        self.assertAlmostEqual(ext["specularFactor"], sf)
+        self.assertAlmostEqual(ext["specularColorFactor"][2] * sf, 0.01)
+        # Glass keeps its own Fresnel: half transmission halves the scaling.
+        half = {}
+        gltf_post.cycles_specular_layer(g, half, 0.0, 0.5)
+        self.assertEqual(half["extensions"]["KHR_materials_specular"]["specularFactor"], 0.5)
+        # Specular >= 0.3, full glass, or a linked input: as exported.
+        for s, t in ((0.3, 0.0), (1.0, 0.0), (0.0, 1.0), (None, 0.0), (0.0, None)):
+            mat = {"extensions": {"KHR_materials_specular": {"specularColorFactor": [0.2, 0.2, 0.2]}}}
+            gltf_post.cycles_specular_layer({}, mat, s, t)
+            self.assertEqual(mat["extensions"]["KHR_materials_specular"], {"specularColorFactor": [0.2, 0.2, 0.2]})
+
+
+class AreaLights(unittest.TestCase):
+    @staticmethod
+    def polygon_area(points):
+        n = len(points)
+        return 0.5 * sum(points[i][0] * points[(i + 1) % n][1] - points[(i + 1) % n][0] * points[i][1]
+                         for i in range(n))  # fmt: skip
+
+    def test_outline_keeps_the_area(self):
+        self.assertAlmostEqual(self.polygon_area(area_lights.outline("RECTANGLE", 2.0, 0.5)), 1.0)
+        self.assertAlmostEqual(self.polygon_area(area_lights.outline("SQUARE", 2.0, 0.5)), 4.0)
+        disc = area_lights.outline("DISK", 2.0, 0.5)
+        self.assertEqual(len(disc), area_lights.ROUND_SEGMENTS)
+        self.assertAlmostEqual(self.polygon_area(disc), math.pi, places=12)  # counter-clockwise: positive
+        self.assertAlmostEqual(self.polygon_area(area_lights.outline("ELLIPSE", 2.0, 0.5, 7)), math.pi / 4, places=12)
+
+    def test_cycles_area_and_radiance(self):
+        world = [[2, 0, 0, 1], [0, 3, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+        self.assertAlmostEqual(area_lights.cycles_area("RECTANGLE", 1.0, 0.5, world), 3.0)
+        self.assertAlmostEqual(area_lights.cycles_area("DISK", 1.0, 0.5, world), 6.0 * math.pi / 4)
+        self.assertAlmostEqual(area_lights.cycles_area("ELLIPSE", 1.0, 0.5, world), 3.0 * math.pi / 4)
+        self.assertEqual(area_lights.radiance([1.0, 0.5, 0.0], 100.0, 2.0), [12.5, 6.25, 0.0])
+
+    def check_faces(self, world, down):
+        for shape in ("SQUARE", "DISK"):
+            pos, tris = area_lights.emitter_mesh(shape, 1.0, 1.0, world)
+            for a, b, c in tris:
+                e1 = [pos[b][k] - pos[a][k] for k in range(3)]
+                e2 = [pos[c][k] - pos[a][k] for k in range(3)]
+                nz = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]]
+                self.assertGreater(sum(nz[k] * down[k] for k in range(3)), 0.0, (shape, world))
+
+    def test_faces_the_lights_minus_z(self):
+        self.check_faces([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2], [0, 0, 0, 1]], [0, 0, -1])
+        # Turned to face +x (local z -> world -x), and mirrored (local x -> world -x).
+        self.check_faces([[0, 0, -1, 0], [0, 1, 0, 0], [1, 0, 0, 0], [0, 0, 0, 1]], [1, 0, 0])
+        self.check_faces([[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], [0, 0, -1])
+
+    def test_add_emitters(self):
+        g = {"scenes": [{"nodes": [0]}], "nodes": [{"name": "floor"}], "materials": [{"name": "white"}]}
+        world = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 2], [0, 0, 0, 1]]
+        lights = [
+            {"name": "rect", "shape": "RECTANGLE", "size_x": 2.0, "size_y": 0.5, "world": world,
+             "color": [1.0, 0.5, 0.25], "power": 40.0},
+            {"name": "disc", "shape": "DISK", "size_x": 1.0, "size_y": 9.0, "world": world,
+             "color": [1.0, 1.0, 1.0], "power": math.pi},
+        ]  # fmt: skip
+        data = area_lights.add_emitters(g, lights, "a.bin")
+        self.assertEqual(len(data), g["buffers"][0]["byteLength"])
+        self.assertEqual(g["scenes"][0]["nodes"], [0, 1, 2])
+        rect, disc = (g["materials"][g["meshes"][g["nodes"][i]["mesh"]]["primitives"][0]["material"]] for i in (1, 2))
+        self.assertFalse(rect["doubleSided"])
+        strength = rect["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"]
+        self.assertAlmostEqual(strength, 40.0 / (4 * 1.0))  # P / (4 A), colour peak 1
+        self.assertEqual(rect["emissiveFactor"], [1.0, 0.5, 0.25])
+        self.assertAlmostEqual(disc["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"], 1.0)
+        self.assertIn("KHR_materials_emissive_strength", g["extensionsUsed"])
+        prim = g["meshes"][g["nodes"][2]["mesh"]]["primitives"][0]
+        pos = g["accessors"][prim["attributes"]["POSITION"]]
+        self.assertEqual(pos["count"], area_lights.ROUND_SEGMENTS + 1)
+        self.assertAlmostEqual(pos["min"][1], 2.0)  # glTF y = Blender z
+        idx = g["accessors"][prim["indices"]]
+        self.assertEqual(idx["count"], 3 * area_lights.ROUND_SEGMENTS)
+        view = g["bufferViews"][idx["bufferView"]]
+        tris = struct.unpack_from(f"<{idx['count']}H", data, view["byteOffset"])
+        self.assertEqual(max(tris), area_lights.ROUND_SEGMENTS)
+        json.dumps(g)
+        self.assertEqual(area_lights.add_emitters({}, [], "x.bin"), b"")
 
 
 class MainThread(unittest.TestCase):
