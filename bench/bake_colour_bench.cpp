@@ -87,6 +87,14 @@ int main(int argc, char** argv) {
     const fs::path dir = argv[2];
     fs::create_directories(dir);
     nerf::NerfModel model = nerf::load_model(argv[1]);
+    if (const char* tj = std::getenv("VIEWDIRS_FROM")) {  // a model written before view directions were stored
+        const auto j = nlohmann::json::parse(std::ifstream(tj));
+        for (const auto& f : j["frames"]) {
+            const auto& m = f["transform_matrix"];
+            const Vec3 fwd(-m[0][2].get<float>(), -m[1][2].get<float>(), -m[2][2].get<float>());
+            model.view_directions.push_back(normalize(model.world_to_model.transform_vector(fwd)));
+        }
+    }
     nerf::save_model(dir / "m.npt", model, false);
     std::vector<int> resolutions;
     for (int i = 3; i < argc; ++i) resolutions.push_back(std::atoi(argv[i]));
