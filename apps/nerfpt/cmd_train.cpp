@@ -155,6 +155,9 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         const nerf::NerfConfig config = args.config.empty() ? base : nerf::load_config(args.config, base);
         model = nerf::create_model(config, data.aabb_scale, nerf::ngp_world_to_model(data.scale, data.offset));
     }
+    // Where the cameras looked: a bake averages the colour over these directions (bake/bake_grid.h). Also set
+    // when resuming a model written before they were stored.
+    model.view_directions = nerf::training_view_directions(data.cameras, model.world_to_model);
     if (args.checkpoint_every > 0) model.config.training.checkpoint_interval = args.checkpoint_every;
     const uint64_t target_steps = args.steps ? args.steps : (args.seconds > 0 ? UINT64_MAX : k_default_steps);
     spdlog::info("training on {} frames of {}x{}, aabb_scale {}, {} parameters{}", data.cameras.size(),

@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/srgb.h"
 #include "nerf/field_batch.h"
 #include "nerf/mlp_batch.h"
 #include "nerf/sh_encoding.h"
@@ -81,6 +82,87 @@ void slab_density(const NerfModel& model, const BakeLayout& L, int k, float thre
     keep_dense(cand, sigma.data(), threshold, out);
 }
 
+// Where a voxel can be seen from. The colour network is trained only for (point, direction) pairs that a
+// camera saw, i.e. where the point was not hidden behind other matter along the direction; from other
+// directions its colour is whatever the network extrapolates (measured on lego: a bake averaging over those
+// rendered 5-7% darker, docs/benchmarks.md "Bakes that keep the colour"). So each direction's colour is weighted
+// by the voxel's transmittance towards the viewer, marched through the baked density, mean-pooled onto a grid
+// of at most k_vis_cells per side (visibility needs no fine detail, and the march then costs little).
+constexpr int k_vis_cells = 64;
+// Transmittance floor: a voxel hidden from every direction (inside the object) gets the plain weighted mean.
+constexpr float k_min_visibility = 1e-4f;
+
+struct VisibilityGrid {
+    int factor = 1;      // fine voxels per coarse cell along each axis
+    int dims[3] = {1, 1, 1};
+    Vec3 voxel_model;    // a fine voxel's size in model units along local x, y, z
+    std::vector<float> sigma;  // mean σ per coarse cell (per model unit)
+
+    float at(int i, int j, int k) const {
+        return sigma[(size_t(k) * size_t(dims[1]) + size_t(j)) * size_t(dims[0]) + size_t(i)];
+    }
+};
+
+VisibilityGrid make_visibility_grid(const BakeLayout& L, const std::vector<SlabDensity>& dens) {
+    VisibilityGrid v;
+    const int longest = std::max(L.dims[0], std::max(L.dims[1], L.dims[2]));
+    v.factor = std::max(1, (longest + k_vis_cells - 1) / k_vis_cells);
+    for (int a = 0; a < 3; ++a) v.dims[a] = (L.dims[a] + v.factor - 1) / v.factor;
+    const Vec3 side = nerf::model_to_world_axes(L.crop.max - L.crop.min);
+    for (int a = 0; a < 3; ++a) v.voxel_model[a] = side[a] / float(L.dims[a]);
+    v.sigma.assign(size_t(v.dims[0]) * size_t(v.dims[1]) * size_t(v.dims[2]), 0.0f);
+    const float per_cell = 1.0f / float(v.factor * v.factor * v.factor);
+    const uint32_t nx = uint32_t(L.dims[0]);
+    for (int k = 0; k < L.dims[2]; ++k)
+        for (size_t t = 0; t < dens[size_t(k)].ij.size(); ++t) {
+            const uint32_t ij = dens[size_t(k)].ij[t];
+            const int i = int(ij % nx) / v.factor, j = int(ij / nx) / v.factor, kc = k / v.factor;
+            v.sigma[(size_t(kc) * size_t(v.dims[1]) + size_t(j)) * size_t(v.dims[0]) + size_t(i)] +=
+                dens[size_t(k)].sigma[t] * per_cell;
+        }
+    return v;
+}
+
+// Transmittance from fine voxel (i, j, k)'s centre back along -d (d: a ray direction, model axes) to the edge
+// of the crop. The march starts one coarse cell and half a fine voxel away, past the voxel's own surface.
+float visibility(const VisibilityGrid& v, int i, int j, int k, Vec3 d_model) {
+    const Vec3 d = nerf::model_to_world_axes(d_model);  // local axes, as the voxel indices
+    const float vmin = std::min(v.voxel_model.x, std::min(v.voxel_model.y, v.voxel_model.z));
+    const float vmax = std::max(v.voxel_model.x, std::max(v.voxel_model.y, v.voxel_model.z));
+    const float h = 0.5f * float(v.factor) * vmin;  // model units per step
+    Vec3 step, p;
+    for (int a = 0; a < 3; ++a) step[a] = -d[a] * h / v.voxel_model[a];
+    const float t0 = (float(v.factor) + 0.5f) * vmax;
+    const int idx[3] = {i, j, k};
+    for (int a = 0; a < 3; ++a) p[a] = float(idx[a]) + 0.5f - d[a] * t0 / v.voxel_model[a];
+    const float fine[3] = {float(v.dims[0] * v.factor), float(v.dims[1] * v.factor), float(v.dims[2] * v.factor)};
+    float tau = 0.0f;
+    while (p.x >= 0.0f && p.y >= 0.0f && p.z >= 0.0f && p.x < fine[0] && p.y < fine[1] && p.z < fine[2]) {
+        tau += v.at(int(p.x) / v.factor, int(p.y) / v.factor, int(p.z) / v.factor) * h;
+        if (tau > 12.0f) break;  // T < 1e-5: hidden
+        p += step;
+    }
+    return std::exp(-tau);
+}
+
+// One voxel's colour from its colour for each direction (sigmoid outputs, sRGB-encoded): the weighted mean in
+// linear light (what the renderer displays and a camera's pixels average), encoded back to sRGB so that the
+// BakedGrid keeps its meaning for every writer.
+Rgb combine_colors(const VisibilityGrid& vis, const ColourDirections& cd, int i, int j, int k, const Rgb* per_dir) {
+    const size_t n = cd.dirs.size();
+    if (n == 1) return per_dir[0];
+    Rgb sum(0.0f);
+    float wsum = 0.0f;
+    for (size_t d = 0; d < n; ++d) {
+        const float w = cd.weights[d] * std::max(k_min_visibility, visibility(vis, i, j, k, cd.dirs[d]));
+        const Rgb c = per_dir[d];
+        sum += Rgb(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)) * w;
+        wsum += w;
+    }
+    const Rgb m = sum / wsum;
+    return Rgb(linear_to_srgb(m.x), linear_to_srgb(m.y), linear_to_srgb(m.z));
+}
+
 // Pass 2, which voxels: the slab's density voxels and their 3x3x3 neighbours, without colour yet; pos gets
 // their centres.
 void slab_color_voxels(const BakeLayout& L, int k, const std::vector<SlabDensity>& dens, SlabVoxels& out,
@@ -123,16 +205,22 @@ void slab_color_voxels(const BakeLayout& L, int k, const std::vector<SlabDensity
     }
 }
 
-// Pass 2 on the CPU: the slab's voxels with their colour, averaged over the directions (the density MLP's
-// outputs once per voxel, then the colour MLP once per direction).
+// Pass 2 on the CPU: the slab's voxels with their colour for each direction (the density MLP's outputs once
+// per voxel, then the colour MLP once per direction), combined by combine_colors.
+// A relightable model's bake would store its albedo here instead (NerfModel::intrinsic(), view-independent:
+// no directions to average), for a renderer that shades the grid; today every model bakes its radiance.
 void slab_color(const NerfModel& model, const BakeLayout& L, int k, const std::vector<SlabDensity>& dens,
-                const std::vector<float>& sh, size_t n_dirs, nerf::FieldBatch& b, SlabVoxels& out) {
+                const std::vector<float>& sh, const ColourDirections& cd, const VisibilityGrid& vis,
+                nerf::FieldBatch& b, SlabVoxels& out) {
     const nerf::NerfLayout nl = model.layout();
+    const size_t n_dirs = cd.dirs.size();
     std::vector<Vec3> pos;
     slab_color_voxels(L, k, dens, out, pos);
     const int dens_out = nl.density.outputs, col_in = nl.color.inputs, co = nl.color.outputs;
     std::vector<float> in, y;
+    std::vector<Rgb> per_dir(n_dirs);
     out.color.resize(pos.size());
+    const uint32_t nx = uint32_t(L.dims[0]);
     for (size_t off = 0; off < pos.size(); off += k_chunk) {
         const size_t m = std::min(k_chunk, pos.size() - off);
         nerf::field_forward(nl, model.params.data(), pos.data() + off, nullptr, m, false, b);
@@ -147,12 +235,12 @@ void slab_color(const NerfModel& model, const BakeLayout& L, int k, const std::v
         nerf::mlp_forward_batch(nl.color, model.params.data() + nl.color_offset, in.data(), m * n_dirs,
                                 y.data(), nullptr);
         for (size_t t = 0; t < m; ++t) {
-            Rgb sum(0.0f);
             for (size_t d = 0; d < n_dirs; ++d) {
                 const float* o = &y[(t * n_dirs + d) * size_t(co)];
-                sum += Rgb(nerf::sigmoidf(o[0]), nerf::sigmoidf(o[1]), nerf::sigmoidf(o[2]));
+                per_dir[d] = Rgb(nerf::sigmoidf(o[0]), nerf::sigmoidf(o[1]), nerf::sigmoidf(o[2]));
             }
-            out.color[off + t] = sum / float(n_dirs);
+            const uint32_t ij = out.ij[off + t];
+            out.color[off + t] = combine_colors(vis, cd, int(ij % nx), int(ij / nx), k, per_dir.data());
         }
     }
 }
@@ -191,17 +279,24 @@ void density_with(BakeField& field, const NerfModel& model, const BakeLayout& L,
 }
 
 void color_with(BakeField& field, const BakeLayout& L, const std::vector<SlabDensity>& dens,
-                const std::vector<Vec3>& dirs, std::vector<SlabVoxels>& slabs, const std::function<void()>& slab_done) {
+                const ColourDirections& cd, const VisibilityGrid& vis, std::vector<SlabVoxels>& slabs,
+                const std::function<void()>& slab_done) {
     const int nz = L.dims[2];
+    const size_t nd = cd.dirs.size();
+    const uint32_t nx = uint32_t(L.dims[0]);
     std::vector<Vec3> pos, batch;
     std::vector<int> pending;
     std::vector<Rgb> color;
     auto flush = [&] {
-        field.mean_color(batch, dirs, color);
+        field.colors(batch, cd.dirs, color);
         size_t off = 0;
         for (int k : pending) {
             SlabVoxels& s = slabs[size_t(k)];
-            s.color.assign(color.begin() + off, color.begin() + off + s.ij.size());
+            s.color.resize(s.ij.size());
+            tbb::parallel_for(size_t(0), s.ij.size(), [&](size_t t) {
+                s.color[t] = combine_colors(vis, cd, int(s.ij[t] % nx), int(s.ij[t] / nx), k,
+                                            &color[(off + t) * nd]);
+            });
             off += s.ij.size();
             slab_done();
         }
@@ -212,7 +307,7 @@ void color_with(BakeField& field, const BakeLayout& L, const std::vector<SlabDen
         slab_color_voxels(L, k, dens, slabs[size_t(k)], pos);
         batch.insert(batch.end(), pos.begin(), pos.end());
         pending.push_back(k);
-        if (batch.size() * dirs.size() >= k_field_batch) flush();
+        if (batch.size() * nd >= k_field_batch) flush();
     }
     flush();
 }
@@ -298,6 +393,49 @@ std::vector<Vec3> average_directions() {
     return dirs;
 }
 
+ColourDirections colour_directions(const NerfModel& model, const BakeSettings& settings) {
+    ColourDirections cd;
+    if (settings.direction) {
+        const Vec3 d = nerf::world_axes_to_model(*settings.direction);
+        const float len = length(d);
+        if (!(len > 0.0f) || !std::isfinite(len))
+            throw Error("--direction " + vec_text(*settings.direction) +
+                        ": must be a non-zero finite vector");
+        cd.dirs.push_back(d / len);
+    } else if (model.view_directions.empty()) {
+        cd.dirs = average_directions();
+    } else if (model.view_directions.size() <= k_max_colour_directions) {
+        cd.dirs = model.view_directions;
+    } else {
+        // Farthest-point sampling from the first camera: the picks cover the cameras' directions evenly.
+        const std::vector<Vec3>& all = model.view_directions;
+        std::vector<float> nearest(all.size(), 2.0f);  // 1 - cos of the angle to the nearest pick
+        size_t next = 0;
+        while (cd.dirs.size() < k_max_colour_directions) {
+            cd.dirs.push_back(all[next]);
+            size_t far = 0;
+            for (size_t c = 0; c < all.size(); ++c) {
+                nearest[c] = std::min(nearest[c], 1.0f - dot(all[c], all[next]));
+                if (nearest[c] > nearest[far]) far = c;
+            }
+            next = far;
+        }
+    }
+    cd.weights.assign(cd.dirs.size(), 0.0f);
+    if (!settings.direction && cd.dirs.size() < model.view_directions.size()) {
+        // Each pick stands for the cameras nearest to it.
+        for (const Vec3& c : model.view_directions) {
+            size_t best = 0;
+            for (size_t d = 1; d < cd.dirs.size(); ++d)
+                if (dot(c, cd.dirs[d]) > dot(c, cd.dirs[best])) best = d;
+            cd.weights[best] += 1.0f;
+        }
+    } else {
+        std::fill(cd.weights.begin(), cd.weights.end(), 1.0f);
+    }
+    return cd;
+}
+
 BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const BakeProgress& progress,
                      BakeField* field) {
     BakedGrid g;
@@ -307,19 +445,9 @@ BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const
     if (!(g.threshold >= 0.0f) || !std::isfinite(g.threshold))
         throw Error(fmt::format("--threshold {:g}: must be a finite σ >= 0 (per model unit)", g.threshold));
 
-    std::vector<Vec3> dirs;
-    if (settings.direction) {
-        const Vec3 d = nerf::world_axes_to_model(*settings.direction);
-        const float len = length(d);
-        if (!(len > 0.0f) || !std::isfinite(len))
-            throw Error("--direction " + vec_text(*settings.direction) +
-                        ": must be a non-zero finite vector");
-        dirs.push_back(d / len);
-    } else {
-        dirs = average_directions();
-    }
-    std::vector<float> sh(dirs.size() * nerf::k_sh_deg4_dims);
-    for (size_t d = 0; d < dirs.size(); ++d) nerf::sh_encode_deg4(dirs[d], &sh[d * nerf::k_sh_deg4_dims]);
+    const ColourDirections cd = colour_directions(model, settings);
+    std::vector<float> sh(cd.dirs.size() * nerf::k_sh_deg4_dims);
+    for (size_t d = 0; d < cd.dirs.size(); ++d) nerf::sh_encode_deg4(cd.dirs[d], &sh[d * nerf::k_sh_deg4_dims]);
 
     const int nz = L.dims[2];
     const uint64_t plane = uint64_t(L.dims[0]) * uint64_t(L.dims[1]);
@@ -334,7 +462,8 @@ BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const
     std::vector<SlabVoxels> slabs(static_cast<size_t>(nz));
     if (field) {
         density_with(*field, model, L, g.threshold, dens, report);
-        color_with(*field, L, dens, dirs, slabs, report);
+        const VisibilityGrid vis = make_visibility_grid(L, dens);
+        color_with(*field, L, dens, cd, vis, slabs, report);
     } else {
     // Slabs are independent and each writes only its own output, so the result is the same for any thread
     // count and scheduling.
@@ -347,10 +476,11 @@ BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const
             report();
         }
     });
+    const VisibilityGrid vis = make_visibility_grid(L, dens);
     tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& r) {
         nerf::FieldBatch b;
         for (int k = r.begin(); k != r.end(); ++k) {
-            slab_color(model, L, k, dens, sh, dirs.size(), b, slabs[size_t(k)]);
+            slab_color(model, L, k, dens, sh, cd, vis, b, slabs[size_t(k)]);
             report();
         }
     });

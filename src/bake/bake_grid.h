@@ -27,7 +27,7 @@ struct BakeSettings {
     std::optional<nerf::CropBox> crop;  // model space; default: the model's aabb, 0.5 -+ aabb_scale / 2
     int resolution = 256;               // voxels along the crop's longest side (when voxel_size is 0)
     float voxel_size = 0.0f;            // model units; > 0 overrides resolution
-    std::optional<Vec3> direction;      // training-world axes; none: the average over average_directions()
+    std::optional<Vec3> direction;      // training-world axes; none: the average over colour_directions()
     std::optional<float> threshold;     // σ per model unit; none: default_threshold(model)
 };
 
@@ -56,8 +56,23 @@ BakeLayout make_bake_layout(const nerf::NerfModel& model, const BakeSettings& se
 // unit with the default config.
 float default_threshold(const nerf::NerfModel& model);
 
-// The 16 directions `avg` averages the colour over: a Fibonacci sphere, model axes, unit length.
+// The 16 directions of a Fibonacci sphere, model axes, unit length: what `avg` averages the colour over for a
+// model that does not store its training cameras' directions.
 std::vector<Vec3> average_directions();
+
+// At most this many directions are averaged over (the colour MLP runs once per voxel and direction).
+constexpr size_t k_max_colour_directions = 16;
+
+// The directions (model axes, unit) a bake's colour is averaged over, with their weights. The network's
+// colour is trained only for directions a training camera looked along, so `avg` uses the model's
+// view_directions: all of them when there are at most k_max_colour_directions, else that many picked by
+// farthest-point sampling, each weighted by how many cameras lie nearest to it. A model without them
+// (written before they were stored) gets average_directions(), equally weighted. `--direction`: that one.
+struct ColourDirections {
+    std::vector<Vec3> dirs;
+    std::vector<float> weights;
+};
+ColourDirections colour_directions(const nerf::NerfModel& model, const BakeSettings& settings);
 
 // The baked voxels, sparse, ordered by k, then j, then i. A voxel is listed when it has density (σ above the
 // threshold, in an occupied cell) or when it neighbours one (3x3x3): those carry colour with σ = 0, so that
@@ -67,7 +82,10 @@ struct BakedGrid {
     float threshold = 0.0f;
     std::vector<int32_t> coords;  // 3 per voxel: i, j, k
     std::vector<float> sigma;     // per model unit; 0 for colour-only voxels
-    std::vector<Rgb> color;  // the NeRF's sRGB-encoded values (sigmoid outputs), averaged over directions
+    // The NeRF's colour as its sRGB-encoded sigmoid outputs store it: for `avg`, the average in LINEAR light
+    // over colour_directions(), each direction also weighted by the voxel's visibility from it (see
+    // bake_grid.cpp), encoded back to sRGB.
+    std::vector<Rgb> color;
     std::vector<uint8_t> has_density;  // 1: a density voxel; 0: colour only
     uint64_t density_voxels = 0;       // how many have has_density
 
@@ -82,9 +100,10 @@ class BakeField {
     virtual ~BakeField() = default;
     // σ (per model unit) at the points.
     virtual void density(const std::vector<Vec3>& positions, std::vector<float>& sigma) = 0;
-    // The colour (sigmoid outputs) at each point, averaged over `dirs` (unit, model axes) in their order.
-    virtual void mean_color(const std::vector<Vec3>& positions, const std::vector<Vec3>& dirs,
-                            std::vector<Rgb>& color) = 0;
+    // The colour (sigmoid outputs) at each point for each of `dirs` (unit, model axes): color[t * dirs.size()
+    // + d] for point t and direction d.
+    virtual void colors(const std::vector<Vec3>& positions, const std::vector<Vec3>& dirs,
+                        std::vector<Rgb>& color) = 0;
 };
 
 // Bakes the model: on the CPU (field == nullptr) in parallel over z-slabs (TBB), or with `field` over batches

@@ -267,6 +267,8 @@ struct RawModel {
     std::optional<TrainingState> training;
     uint64_t training_step = 0, training_count = 0;
     std::optional<std::vector<uint8_t>> relight;  // RLIT's payload, decoded once the checksum has vouched for it
+    std::optional<std::vector<float>> view_directions;  // 3 per direction
+    uint64_t view_count = 0;
 };
 
 void check_finite(const std::vector<float>& x, const Reader& in, const char* what) {
@@ -353,6 +355,11 @@ RawModel read_sections(Reader& in) {
             raw.resolution = in.get<uint32_t>();
             raw.density.emplace(size_t((length - 8) / 4));
             in.read(raw.density->data(), raw.density->size() * 4);
+        } else if (tag == "VIEW") {
+            if (length < 8 || (length - 8) % 12 != 0) throw corrupt();
+            raw.view_count = in.get<uint64_t>();
+            raw.view_directions.emplace(size_t((length - 8) / 4));
+            in.read(raw.view_directions->data(), raw.view_directions->size() * 4);
         } else if (tag == "TRAN") {
             if (length < 32 || (length - 32) % 16 != 0) throw corrupt();
             TrainingState& t = raw.training.emplace();
@@ -411,6 +418,9 @@ void save_model(const fs::path& path, const NerfModel& model, bool with_training
     check(model.params, "parameter");
     if (const size_t i = first_non_finite(model.occupancy.density()); i < model.occupancy.density().size())
         throw refuse("occupancy density " + std::to_string(i) + " is NaN or Inf");
+    for (size_t i = 0; i < model.view_directions.size(); ++i)
+        if (const float len = length(model.view_directions[i]); !(len > 0.5f && len < 2.0f))
+            throw refuse("view direction " + std::to_string(i) + " is not a unit vector");
     const TrainingState* training = with_training && model.training ? &*model.training : nullptr;
     if (training) {
         check(training->params, "training parameter");
@@ -446,6 +456,14 @@ void save_model(const fs::path& path, const NerfModel& model, bool with_training
     out.put(uint32_t(model.occupancy.cascades()));
     out.put(uint32_t(model.occupancy.resolution()));
     out.write(density.data(), 4 * density.size());
+    if (!model.view_directions.empty()) {
+        out.section("VIEW", 8 + 12 * uint64_t(model.view_directions.size()));
+        out.put(uint64_t(model.view_directions.size()));
+        for (const Vec3& d : model.view_directions) {
+            const float xyz[3] = {d.x, d.y, d.z};
+            out.write(xyz, sizeof(xyz));
+        }
+    }
     if (training) {
         out.section("TRAN", 32 + 16 * uint64_t(total));
         out.put(uint64_t(training->adam.step));
@@ -505,6 +523,19 @@ NerfModel load_model(const fs::path& path) {
         model.occupancy.set_density(std::move(*raw.density), model.config.occupancy.threshold);
     } catch (const Error& e) {
         throw in.error(e.what());
+    }
+
+    if (raw.view_directions) {
+        const std::vector<float>& v = *raw.view_directions;
+        if (raw.view_count * 3 != v.size()) throw in.error("corrupt section 'VIEW' (count does not match length)");
+        check_finite(v, in, "view direction component");
+        for (size_t i = 0; i < v.size(); i += 3) {
+            const Vec3 d(v[i], v[i + 1], v[i + 2]);
+            const float len = length(d);
+            if (!(len > 0.5f && len < 2.0f))
+                throw in.error("view direction " + std::to_string(i / 3) + " is not a unit vector");
+            model.view_directions.push_back(d / len);
+        }
     }
 
     if (raw.training) {

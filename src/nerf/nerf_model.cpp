@@ -61,6 +61,19 @@ Mat4 ngp_world_to_model(float scale, Vec3 offset) {
     return m;
 }
 
+std::vector<Vec3> training_view_directions(const std::vector<Camera>& cameras, const Mat4& world_to_model) {
+    std::vector<Vec3> dirs;
+    dirs.reserve(cameras.size());
+    for (const Camera& c : cameras) {
+        const Mat4& m = c.camera_to_world;
+        const Vec3 forward(-float(m.m[0][2]), -float(m.m[1][2]), -float(m.m[2][2]));
+        const Vec3 d = world_to_model.transform_vector(forward);
+        const float len = length(d);
+        if (len > 0.0f && std::isfinite(len)) dirs.push_back(d / len);
+    }
+    return dirs;
+}
+
 namespace {
 
 void init_mlp(const MlpShape& s, float* w, Pcg32& rng) {

@@ -10,6 +10,7 @@
 
 #include "core/transform.h"
 #include "nerf/adam.h"
+#include "nerf/dataset.h"
 #include "nerf/nerf_config.h"
 #include "nerf/nerf_field.h"
 #include "nerf/occupancy_grid.h"
@@ -39,6 +40,10 @@ struct NerfModel {
     OccupancyGrid occupancy;
     std::optional<TrainingState> training;
     std::optional<RelightFields> relight;  // present for relightable models (`nerfpt train --relightable`)
+    // The training cameras' viewing directions (optical axes), unit, model axes: the directions in which the
+    // colour network was trained, which a bake averages its colour over (bake/bake_grid.h). Empty for models
+    // written before they were stored (and for imported snapshots).
+    std::vector<Vec3> view_directions;
 
     NerfLayout layout() const { return make_layout(config, aabb_scale); }
     NerfFieldView field() const { return {layout(), params.data()}; }
@@ -54,6 +59,10 @@ struct NerfModel {
 // A fresh model for a data set: parameters initialised (hash grid uniform in +-1e-4, MLP weights
 // Xavier-uniform, from config.training.seed), every occupancy cell occupied.
 NerfModel create_model(const NerfConfig& config, float aabb_scale, const Mat4& world_to_model);
+
+// The data set's cameras' optical axes (camera -z, OpenGL convention) in model axes, unit length: what
+// NerfModel::view_directions stores.
+std::vector<Vec3> training_view_directions(const std::vector<Camera>& cameras, const Mat4& world_to_model);
 
 // instant-ngp's world-to-model map for a data set's scale and offset.
 Mat4 ngp_world_to_model(float scale, Vec3 offset);

@@ -111,8 +111,8 @@ class GpuBakeField final : public bake::BakeField {
         sigma.resize(positions.size());
         m_eval.evaluate(positions.data(), nullptr, positions.size(), sigma.data(), nullptr);
     }
-    void mean_color(const std::vector<Vec3>& positions, const std::vector<Vec3>& dirs,
-                    std::vector<Rgb>& color) override {
+    void colors(const std::vector<Vec3>& positions, const std::vector<Vec3>& dirs,
+                std::vector<Rgb>& color) override {
         const size_t n = positions.size(), nd = dirs.size();
         std::vector<Vec3> pos(n * nd), dir(n * nd);
         for (size_t t = 0; t < n; ++t)
@@ -121,14 +121,8 @@ class GpuBakeField final : public bake::BakeField {
                 dir[t * nd + d] = dirs[d];
             }
         std::vector<float> sigma(n * nd);
-        std::vector<Rgb> rgb(n * nd);
-        m_eval.evaluate(pos.data(), dir.data(), n * nd, sigma.data(), rgb.data());
-        color.resize(n);
-        for (size_t t = 0; t < n; ++t) {
-            Rgb sum(0.0f);  // summed in direction order, as the CPU bake
-            for (size_t d = 0; d < nd; ++d) sum += rgb[t * nd + d];
-            color[t] = sum / float(nd);
-        }
+        color.resize(n * nd);
+        m_eval.evaluate(pos.data(), dir.data(), n * nd, sigma.data(), color.data());
     }
 
   private:
