@@ -6,7 +6,8 @@
 #   PRED/scene/render.exr     the room scene (scene/scene.json with the model), 320x240 at ROOM_SPP
 # Usage: BIN=build MODEL=dev.npt DATA=../shared/data/relight/dev PRED=out/pred bench/relight_dev.sh render
 # Options by variable: SPP (relit views, default 64), ROOM_SPP (default 1024), BACKEND (cpu|optix, default the
-# renderer's own choice), VIEWS (default all 20). Then: score.py DATA PRED.
+# renderer's own choice), VIEWS (default all 20), SHADING (relit or emissive: the volume's "shading", default the
+# model's own). Then: score.py DATA PRED.
 set -euo pipefail
 mode=${1:-render}
 [[ $mode == render ]] || { echo "usage: relight_dev.sh render (with BIN MODEL DATA PRED set)" >&2; exit 2; }
@@ -18,11 +19,13 @@ model=$(realpath "$MODEL")
 data=$(realpath "$DATA")
 scenes=$(mktemp -d)
 trap 'rm -rf "$scenes"' EXIT
-python3 - "$data" "$model" "$scenes" "${VIEWS:-}" <<'PY'
+python3 - "$data" "$model" "$scenes" "${VIEWS:-}" "${SHADING:-}" <<'PY'
 import json, os, sys
-data, model, out, views = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
+data, model, out, views, shading = sys.argv[1:6]
 volume = {"name": "capture", "file": model, "translation": [0, 0, 0],
           "rotation": [-0.7071067811865476, 0, 0, 0.7071067811865476], "scale": [1.5151515151515151] * 3}
+if shading:
+    volume["shading"] = shading
 for light in ("sunset", "studio"):
     frames = json.load(open(os.path.join(data, "relit", light, "transforms.json")))["frames"]
     keep = range(len(frames)) if not views else [int(v) for v in views.split(",")]
@@ -40,6 +43,8 @@ room["include"] = [os.path.join(data, "scene", f) for f in room["include"]]
 room["environment"]["file"] = os.path.join(data, "scene", room["environment"]["file"])
 for v in room["volumes"]:
     v["file"] = model
+    if shading:
+        v["shading"] = shading
 json.dump(room, open(os.path.join(out, "room.json"), "w"), indent=1)
 PY
 mkdir -p "$PRED/relit/sunset" "$PRED/relit/studio" "$PRED/aov" "$PRED/scene"
@@ -56,8 +61,8 @@ for f in "$scenes"/sunset_*.json "$scenes"/studio_*.json; do
     else
         "$BIN/nerfpt" render "$f" -o "$PRED/relit/$light/r_$k.exr" --transparent --spp "$spp" $backend -q
     fi
-    echo "$light view $k: $(echo "$(date +%s.%N) - $start" | bc) s"
+    echo "$light view $k: $(awk "BEGIN {print $(date +%s.%N) - $start}") s"
 done
 start=$(date +%s.%N)
 "$BIN/nerfpt" render "$scenes/room.json" -o "$PRED/scene/render.exr" --spp "$room_spp" $backend -q
-echo "room: $(echo "$(date +%s.%N) - $start" | bc) s at $room_spp spp"
+echo "room: $(awk "BEGIN {print $(date +%s.%N) - $start}") s at $room_spp spp"
