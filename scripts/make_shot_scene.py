@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Writes scenes/shot/scene.gltf: a small animated shot for `nerfpt render --frames` (docs/formats.md, Animation).
 
-A grey floor, a white ceiling panel that emits, a red cube that slides and turns, and a camera on a rig that
-swings about +Y (slerp) while it dollies in (LINEAR, then a CUBICSPLINE ease on the cube's height). Two seconds
-at 24 fps: frames 1-48. Small on purpose (64x48, 16 spp in the scene's extras) so that tests and CI render it
+A grey floor, a white ceiling panel that emits, a red cube that slides (LINEAR), turns in steps (STEP) and
+stretches (CUBICSPLINE on its scale), and a camera on a rig that swings about +Y (slerp) while it dollies in
+(LINEAR). Two seconds at 24 fps: frames 1-48. Small on purpose (64x48, 16 spp in the scene's extras) so that tests and CI render it
 in seconds. Usage: scripts/make_shot_scene.py [OUT.gltf]
 """
 import base64
