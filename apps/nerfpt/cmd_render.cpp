@@ -15,6 +15,8 @@
 #include "core/progress.h"
 #include "input_checks.h"
 #include "interrupt.h"
+#include "render_outputs.h"
+#include "render_sequence.h"
 #include "media/volume_set.h"
 #include "render/backend/render_backend.h"
 #include "render/renderer.h"
@@ -124,90 +126,34 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
     cmd->add_flag("--denoise", args.denoise,
                   "OptiX backend: run OptiX's AI denoiser (albedo and normal guides); OUT.exr and OUT.png are the "
                   "denoised image, OUT.noisy.exr the render as it came out");
+    cmd->add_option("--frames", args.frames,
+                    "Render a sequence: frames FIRST-LAST[:STEP] (e.g. 1-240 or 1-240:2) of the scene's glTF "
+                    "animation, frame F at F/FPS seconds; OUT must hold #### (shot.####.exr -> shot.0001.exr)");
+    cmd->add_flag("--overwrite", args.overwrite,
+                  "Sequences: render every frame again (default: frames whose EXR reads back whole are skipped)");
+    cmd->add_option("--fps", args.fps, "Sequences: frames per second, 0.001..1000 (default: the scene's \"fps\", else 24)")
+        ->check(CLI::Range(0.001, 1000.0));
+    cmd->add_option("--animation", args.animation,
+                    "The glTF animation to play, by name (default: the file's first)");
+    cmd->add_option("--task-index", args.task_index,
+                    "Sequences on a farm: this task's index, 0..COUNT-1; it renders the INDEX-th of COUNT contiguous "
+                    "chunks of the frames (default: $SLURM_ARRAY_TASK_ID, else 0)")
+        ->check(CLI::Range(0, 1 << 20));
+    cmd->add_option("--task-count", args.task_count,
+                    "Sequences on a farm: the number of tasks (default: $SLURM_ARRAY_TASK_COUNT, else 1)")
+        ->check(CLI::Range(1, 1 << 20));
     return cmd;
 }
 
-namespace {
-
-// Refuses an output we could not write, before minutes of rendering are spent.
-void check_output(const fs::path& out) {
-    std::string ext = out.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext != ".exr")
-        throw Error("--output '" + out.string() + "': must end in .exr (a PNG preview is written beside it)");
-    if (out.filename() == ".exr") throw Error("--output '" + out.string() + "': needs a file name");
-    const fs::path dir = out.parent_path().empty() ? fs::path(".") : out.parent_path();
-    std::error_code ec;
-    if (!fs::is_directory(dir, ec))
-        throw Error("--output '" + out.string() + "': folder '" + dir.string() +
-                    "' does not exist (create it first)");
-    if (access(dir.c_str(), W_OK) != 0)
-        throw Error("--output '" + out.string() + "': folder '" + dir.string() + "' is not writable");
-    if (fs::is_directory(out, ec)) throw Error("--output '" + out.string() + "': is a folder");
-}
-
-// Every file the scene was read from: the scene files, its textures and its volumes' grids or models.
-std::vector<InputFile> scene_inputs(const scene::Scene& scene) {
-    std::vector<InputFile> in;
-    for (const auto& f : scene.files) in.push_back({"scene file", f});
-    for (const auto& t : scene.textures)
-        in.push_back({"texture", t.name});  // "<embedded #i>" matches no file
-    for (const auto& v : scene.volumes) {
-        const fs::path declared = v.declared_in.empty() ? scene.source : v.declared_in;
-        try {
-            const fs::path file = media::parse_volume_desc(v.extras_json, declared.string()).file;
-            in.push_back({"volume file", file.is_relative() ? declared.parent_path() / file : file});
-        } catch (const Error&) {  // reported when the volume is loaded
-        }
-    }
-    return in;
-}
-
-// --aov-files: one plain EXR per AOV beside OUT (OUT.albedo.exr, ...), channels that any EXR reader takes as an
-// image (OpenCV reads only R, G, B, A or Y).
-struct AovFile {
-    render::AovBits aov;
-    fs::path path;
-};
-std::vector<AovFile> aov_file_paths(const fs::path& out_exr, uint32_t mask) {
-    std::vector<AovFile> files;
-    for (render::AovBits aov : {render::k_aov_albedo, render::k_aov_normal, render::k_aov_depth})
-        if (mask & aov) {
-            fs::path p = out_exr;
-            p.replace_extension(std::string(".") + render::aov_exr_names(aov).layer + ".exr");
-            files.push_back({aov, p});
-        }
-    return files;
-}
-
-const Image& aov_image(const render::AovImages& aovs, render::AovBits aov) {
-    return aov == render::k_aov_albedo ? aovs.albedo : aov == render::k_aov_normal ? aovs.normal : aovs.depth;
-}
-
-void write_aov_file(const AovFile& f, const render::AovImages& aovs) {
-    const Image& image = aov_image(aovs, f.aov);
-    write_exr_channels(f.path, image,
-                       image.channels == 1 ? std::vector<std::string>{"Y"} : std::vector<std::string>{"R", "G", "B"});
-}
-
-// The AOVs as layers of OUT.exr: albedo.R, normal.X, depth.Z, ... (render/film.h).
-std::vector<ExrLayer> aov_layers(const render::AovImages& aovs, uint32_t mask) {
-    std::vector<ExrLayer> layers;
-    for (render::AovBits aov : {render::k_aov_albedo, render::k_aov_normal, render::k_aov_depth})
-        if (mask & aov) {
-            const render::ExrLayerNames n = render::aov_exr_names(aov);
-            ExrLayer l;
-            for (const std::string& c : n.channels) l.names.push_back(std::string(n.layer) + "." + c);
-            l.image = &aov_image(aovs, aov);
-            layers.push_back(std::move(l));
-        }
-    return layers;
-}
-
-}  // namespace
-
 int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    if (!args.frames.empty()) return run_render_sequence(args, global, interrupts);
+    const auto sequence_only = [](const char* option) {
+        return Error(std::string(option) + ": is for sequences (with --frames FIRST-LAST)");
+    };
+    if (args.overwrite) throw sequence_only("--overwrite");
+    if (args.fps > 0) throw sequence_only("--fps");
+    if (args.task_index >= 0) throw sequence_only("--task-index");
+    if (args.task_count >= 0) throw sequence_only("--task-count");
     if (args.backend == "optix") render::choose_render_backend(args.backend, nullptr);  // fails before loading
     if (args.denoise) {  // before loading: the denoiser needs the OptiX backend, chosen or by default
         if (args.backend == "cpu") throw Error("--denoise: the denoiser is OptiX's; it does not run with --backend cpu");
@@ -236,6 +182,7 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     const auto t_load = std::chrono::steady_clock::now();
     scene::LoadOptions load;
     load.camera_name = args.camera;
+    load.animation_name = args.animation;
     const scene::Scene scene = scene::load_scene(args.scene, load);
     for (const fs::path& out : {out_exr, out_png, out_noisy})
         if (out != out_noisy || args.denoise) refuse_overwriting_inputs(out, "--output", scene_inputs(scene));

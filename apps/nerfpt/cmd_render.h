@@ -25,6 +25,13 @@ struct RenderArgs {
     bool transparent = false;  // Film > Transparent: RGBA without the background (or the scene's setting)
     std::string aovs;          // "albedo,normal,depth" or a subset: layers of OUT.exr (render/film.h)
     bool aov_files = false;    // each AOV also as its own EXR beside OUT: OUT.albedo.exr, ...
+    // Sequences (render_sequence.h): --frames FIRST-LAST[:STEP] writes OUT with #### replaced by each frame.
+    std::string frames;
+    bool overwrite = false;    // render frames whose EXR is already whole again
+    double fps = 0.0;          // 0: the scene's (extras "fps"), else 24
+    std::string animation;     // glTF animation by name; empty: the file's first
+    int task_index = -1;       // -1: SLURM_ARRAY_TASK_ID, else 0
+    int task_count = -1;       // -1: SLURM_ARRAY_TASK_COUNT, else 1
 };
 
 // Parses "640x480" strictly: digits only, each side in 1..render::k_max_resolution. Throws npt::Error.

@@ -5,7 +5,12 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
+#include <ImfFloatAttribute.h>
+#include <ImfIntAttribute.h>
+#include <ImfMatrixAttribute.h>
 #include <ImfOutputFile.h>
+#include <ImfStandardAttributes.h>
+#include <ImfStringAttribute.h>
 #include <stb_image.h>
 #include <stb_image_write.h>
 
@@ -236,10 +241,25 @@ void add_exr_channels(Imf::Header& header, Imf::FrameBuffer& fb, const Image& im
     }
 }
 
+void add_exr_metadata(Imf::Header& header, const ExrMetadata& m) {
+    if (m.fps > 0) {
+        // NTSC rates as OpenEXR's own guessExactFps would give them; others as n/1000.
+        const double ntsc = std::round(m.fps) * 1000.0 / 1001.0;
+        const Imf::Rational r = std::abs(m.fps - ntsc) < 1e-3 ? Imf::Rational(int(std::round(m.fps)) * 1000, 1001)
+                                : m.fps == std::round(m.fps) ? Imf::Rational(int(m.fps), 1)
+                                                             : Imf::Rational(int(std::round(m.fps * 1000)), 1000);
+        Imf::addFramesPerSecond(header, r);
+    }
+    if (m.has_camera) Imf::addWorldToCamera(header, Imath::M44f(m.world_to_camera));
+    for (const auto& [name, v] : m.ints) header.insert(name, Imf::IntAttribute(v));
+    for (const auto& [name, v] : m.floats) header.insert(name, Imf::FloatAttribute(v));
+    for (const auto& [name, v] : m.strings) header.insert(name, Imf::StringAttribute(v));
+}
+
 }  // namespace
 
 void write_exr_channels(const fs::path& path, const Image& image, const std::vector<std::string>& names,
-                        const std::vector<ExrLayer>& layers) {
+                        const std::vector<ExrLayer>& layers, const ExrMetadata* metadata) {
     check_size(image.width, image.height, path.string());
     if (names.empty() || size_t(image.channels) < names.size() ||
         image.pixels.size() != size_t(image.width) * size_t(image.height) * size_t(image.channels))
@@ -256,6 +276,7 @@ void write_exr_channels(const fs::path& path, const Image& image, const std::vec
     try {
         Imf::Header header(image.width, image.height);
         header.compression() = Imf::ZIP_COMPRESSION;
+        if (metadata) add_exr_metadata(header, *metadata);
         Imf::FrameBuffer fb;
         add_exr_channels(header, fb, image, names);
         for (const ExrLayer& l : layers) add_exr_channels(header, fb, *l.image, l.names);
@@ -317,11 +338,69 @@ void write_exr(const fs::path& path, const Image& image) {
     write_exr_channels(path, image, {"R", "G", "B"});  // alpha, if any, dropped
 }
 
-void write_exr_layers(const fs::path& path, const Image& image, const std::vector<ExrLayer>& layers) {
+void write_exr_layers(const fs::path& path, const Image& image, const std::vector<ExrLayer>& layers,
+                      const ExrMetadata* metadata) {
     check_writable(path, image);
     const std::vector<std::string> names = image.channels == 4 ? std::vector<std::string>{"R", "G", "B", "A"}
                                                                : std::vector<std::string>{"R", "G", "B"};
-    write_exr_channels(path, image, names, layers);
+    write_exr_channels(path, image, names, layers, metadata);
+}
+
+bool exr_reads_back_whole(const fs::path& path, int width, int height) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) return false;
+    try {
+        check_exr_header(path);
+        Imf::InputFile file(path.string().c_str());
+        const Imath::Box2i dw = file.header().dataWindow();
+        if (dw.max.x - dw.min.x + 1 != width || dw.max.y - dw.min.y + 1 != height) return false;
+        if (!file.isComplete()) return false;
+        // Every channel decoded: a block whose bytes are present but damaged fails here, not in a compositor.
+        Imf::FrameBuffer fb;
+        std::vector<std::vector<float>> planes;
+        const size_t n = size_t(width) * size_t(height);
+        for (auto c = file.header().channels().begin(); c != file.header().channels().end(); ++c) {
+            planes.emplace_back(n);
+            char* base = reinterpret_cast<char*>(planes.back().data()) -
+                         (size_t(dw.min.x) + size_t(dw.min.y) * size_t(width)) * sizeof(float);
+            fb.insert(c.name(), Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * size_t(width)));
+        }
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+        return true;
+    } catch (const std::exception&) {
+        return false;
+    }
+}
+
+ExrMetadata read_exr_metadata(const fs::path& path) {
+    ExrMetadata m;
+    try {
+        check_exr_header(path);
+        Imf::InputFile file(path.string().c_str());
+        const Imf::Header& h = file.header();
+        if (Imf::hasFramesPerSecond(h)) m.fps = double(Imf::framesPerSecond(h));
+        if (Imf::hasWorldToCamera(h)) {
+            m.has_camera = true;
+            const Imath::M44f w = Imf::worldToCamera(h);
+            for (int r = 0; r < 4; ++r)
+                for (int c = 0; c < 4; ++c) m.world_to_camera[r][c] = w[r][c];
+        }
+        for (auto a = h.begin(); a != h.end(); ++a) {
+            if (const auto* i = dynamic_cast<const Imf::IntAttribute*>(&a.attribute())) m.ints.push_back({a.name(), i->value()});
+            if (const auto* f = dynamic_cast<const Imf::FloatAttribute*>(&a.attribute()))
+                m.floats.push_back({a.name(), f->value()});
+            if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&a.attribute()))
+                m.strings.push_back({a.name(), s->value()});
+        }
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        std::string what = e.what();
+        std::replace(what.begin(), what.end(), '\n', ' ');
+        throw Error(path.string() + ": cannot read EXR header (" + what + ")");
+    }
+    return m;
 }
 
 void write_png(const fs::path& path, const Image& image, float exposure_stops) {

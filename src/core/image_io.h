@@ -41,14 +41,33 @@ struct ExrLayer {
     const Image* image = nullptr;
 };
 
+// Header attributes of a frame of a sequence (docs/formats.md): OpenEXR's standard framesPerSecond and
+// worldToCamera, and nerfpt's own ("nerfpt.frame", "nerfpt.yfov", ...). Empty: none written.
+struct ExrMetadata {
+    double fps = 0.0;  // > 0: framesPerSecond, as a rational (24, 30000/1001 from 29.97...)
+    bool has_camera = false;
+    float world_to_camera[4][4] = {};  // row-major, OpenEXR's M44f convention (row vectors: p' = p M)
+    std::vector<std::pair<std::string, int>> ints;
+    std::vector<std::pair<std::string, float>> floats;
+    std::vector<std::pair<std::string, std::string>> strings;
+};
+
 // float32, ZIP: channel c of `image` as names[c] for the first names.size() channels (the rest left out), then
 // every layer's channels. Throws npt::Error naming the file and, for a bad layer, its first channel.
 void write_exr_channels(const std::filesystem::path& path, const Image& image, const std::vector<std::string>& names,
-                        const std::vector<ExrLayer>& layers = {});
+                        const std::vector<ExrLayer>& layers = {}, const ExrMetadata* metadata = nullptr);
 
 // float32, ZIP: R, G, B and, for a 4-channel image, A (written as it is: premultiplied if the image is), then
 // every layer's channels. Throws npt::Error naming the file and, for a bad layer, its first channel.
-void write_exr_layers(const std::filesystem::path& path, const Image& image, const std::vector<ExrLayer>& layers);
+void write_exr_layers(const std::filesystem::path& path, const Image& image, const std::vector<ExrLayer>& layers,
+                      const ExrMetadata* metadata = nullptr);
+
+// True when `path` is an OpenEXR file of width x height whose every channel reads back in full (a frame a
+// sequence may skip); false for a missing, truncated, corrupt or differently sized file. Never throws.
+bool exr_reads_back_whole(const std::filesystem::path& path, int width, int height);
+
+// The header attributes write_exr_layers wrote (fps 0 and has_camera false where absent). Throws npt::Error.
+ExrMetadata read_exr_metadata(const std::filesystem::path& path);
 
 // 8-bit sRGB: value x 2^exposure_stops, sRGB OETF, clamped to [0, 1]; alpha dropped.
 void write_png(const std::filesystem::path& path, const Image& image, float exposure_stops = 0.0f);

@@ -107,6 +107,25 @@ void fill_nerf_volume(const nerf::NerfModel& m, const VolumeDesc& desc, Vec3 loc
     v.nerf.intrinsic = v.nerf.relit ? m.intrinsic() : nerf::IntrinsicFieldView{};
 }
 
+namespace {
+// instant-ngp sigma is per unit of its unit cube, taken to span the cube's longest world side (1 when flat).
+float longest_world_side(const scene::VolumeInstance& inst) {
+    const Vec3 size = inst.local_max - inst.local_min;
+    float longest = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+        Vec3 axis(0.0f);
+        axis[a] = size[a];
+        longest = std::max(longest, length(inst.local_to_world.transform_vector(axis)));
+    }
+    return longest > 0.0f ? longest : 1.0f;
+}
+}  // namespace
+
+void VolumeSet::set_placement(size_t i, const scene::VolumeInstance& inst) {
+    m_views[i].world_to_local = affine_from(inst.local_to_world.inverse());
+    m_views[i].density_scale = m_density_scale[i] / (m_per_longest_side[i] ? longest_world_side(inst) : 1.0f);
+}
+
 VolumeSet::VolumeSet(const scene::Scene& scene) {
     m_owned.reserve(scene.volumes.size());
     for (const auto& inst : scene.volumes) {
@@ -137,6 +156,8 @@ VolumeSet::VolumeSet(const scene::Scene& scene) {
             spdlog::debug("{}: NeRF model {} ({} parameters), queried directly, shading {}", where, file.string(),
                           owned.model->params.size(), v.nerf.relit ? "relit" : "emissive");
             m_owned.push_back(std::move(owned));
+            m_density_scale.push_back(desc.density_scale);
+            m_per_longest_side.push_back(0);
             m_views.push_back(v);
             continue;
         }
@@ -152,17 +173,9 @@ VolumeSet::VolumeSet(const scene::Scene& scene) {
         owned.majorant = build_majorant(owned.grid, &owned.mx, &owned.my, &owned.mz);
         m_owned.push_back(std::move(owned));
 
-        if (ext == ".bin") {
-            // instant-ngp sigma is per unit of its unit cube, taken to span the cube's longest world side.
-            Vec3 size = inst.local_max - inst.local_min;
-            float longest = 0.0f;
-            for (int a = 0; a < 3; ++a) {
-                Vec3 axis(0.0f);
-                axis[a] = size[a];
-                longest = std::max(longest, length(inst.local_to_world.transform_vector(axis)));
-            }
-            if (longest > 0.0f) v.density_scale /= longest;
-        }
+        if (ext == ".bin") v.density_scale /= longest_world_side(inst);
+        m_density_scale.push_back(desc.density_scale);
+        m_per_longest_side.push_back(ext == ".bin");
         m_views.push_back(v);
         spdlog::debug("{}: volume grid {}x{}x{} from {}", where, m_owned.back().grid.nx, m_owned.back().grid.ny,
                       m_owned.back().grid.nz, file.string());

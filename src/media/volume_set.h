@@ -52,6 +52,9 @@ class VolumeSet {
     explicit VolumeSet(const scene::Scene& scene);
     VolumeSet(const scene::Scene&&) = delete;
     Span<const VolumeView> views() const { return {m_views.data(), m_views.size()}; }
+    // Moves volume i to `inst`'s placement (an animation frame): what the constructor derives from
+    // local_to_world, without reloading the grid or model.
+    void set_placement(size_t i, const scene::VolumeInstance& inst);
     size_t size() const { return m_views.size(); }
 
   private:
@@ -63,6 +66,8 @@ class VolumeSet {
     };
     std::vector<Owned> m_owned;
     std::vector<VolumeView> m_views;
+    std::vector<float> m_density_scale;  // the scene's density_scale before any placement-dependent factor
+    std::vector<char> m_per_longest_side;  // instant-ngp grids: density per unit of the cube's longest side
 };
 
 }  // namespace npt::media

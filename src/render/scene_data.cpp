@@ -83,7 +83,7 @@ CameraView make_camera_view(const scene::Scene& scene, int width, int height) {
     return c;
 }
 
-SceneData::SceneData(const scene::Scene& scene, int width, int height) {
+SceneData::SceneData(const scene::Scene& scene, int width, int height) : m_width(width), m_height(height) {
     m_materials.reserve(scene.materials.size());
     for (const auto& m : scene.materials) m_materials.push_back(make_material_view(m));
     if (m_materials.empty()) m_materials.push_back(MaterialView{});
@@ -111,6 +111,25 @@ SceneData::SceneData(const scene::Scene& scene, int width, int height) {
     m_view.lights = m_lights->view();
     m_view.volumes = m_volumes->views();
     m_view.camera = make_camera_view(scene, width, height);
+}
+
+void SceneData::update(const scene::Scene& scene, const scene::PoseChanges& changes) {
+    if (!changes.any()) return;
+    for (size_t i : changes.meshes) {
+        const scene::Mesh& m = scene.meshes[i];
+        m_meshes[i].positions = m.positions.data();  // pose_scene may have reallocated the arrays
+        m_meshes[i].normals = m.normals.empty() ? nullptr : m.normals.data();
+        m_meshes[i].indices = m.indices.data();
+    }
+    if (changes.volumes)
+        for (size_t i = 0; i < scene.volumes.size(); ++i) m_volumes->set_placement(i, scene.volumes[i]);
+    m_view.volumes = m_volumes->views();
+    // Emissive triangles, punctual lights and the scene's bounding sphere (distant lights) may all have moved:
+    // the light set is rebuilt whole, as a fresh SceneData would build it.
+    m_lights = std::make_unique<lights::LightSet>(scene);
+    m_view.lights = m_lights->view();
+    // The default view (no camera) frames the scene's bounds, which move with the meshes.
+    m_view.camera = make_camera_view(scene, m_width, m_height);
 }
 
 }  // namespace npt::render

@@ -66,7 +66,7 @@ View checked_view(const Context& ctx, int index, const std::string& what, int ex
     if (a.sparse.isSparse) throw Error(name + ": sparse accessors are not supported");
     if (a.type != expect_type)
         throw Error(name + ": has type " + std::to_string(a.type) + ", expected " +
-                    std::to_string(expect_type) + " (VEC2 = 2, VEC3 = 3, SCALAR = 65)");
+                    std::to_string(expect_type) + " (VEC2 = 2, VEC3 = 3, VEC4 = 4, SCALAR = 65)");
     const size_t elem = component_size(a.componentType) * component_count(a.type);
     if (elem == 0) throw Error(name + ": unknown componentType " + std::to_string(a.componentType));
     if (a.count == 0) return View{nullptr, 0, elem, a.componentType, a.normalized};
@@ -128,6 +128,22 @@ std::vector<Vec3> read_vec3(const Context& ctx, int index, const std::string& wh
                     "): componentType must be FLOAT");
     std::vector<Vec3> out(v.count);
     for (size_t i = 0; i < v.count; ++i) std::memcpy(&out[i], v.data + i * v.stride, sizeof(float) * 3);
+    return out;
+}
+
+std::vector<double> read_floats(const Context& ctx, int index, int type, const std::string& what) {
+    View v = checked_view(ctx, index, what, type);
+    if (v.count && v.component_type != TINYGLTF_COMPONENT_TYPE_FLOAT)
+        throw Error(ctx.file + ": accessor " + std::to_string(index) + " (" + what +
+                    "): componentType must be FLOAT");
+    const size_t width = component_count(type);
+    std::vector<double> out(v.count * width);
+    for (size_t i = 0; i < v.count; ++i)
+        for (size_t k = 0; k < width; ++k) {
+            float f;
+            std::memcpy(&f, v.data + i * v.stride + k * 4, 4);
+            out[i * width + k] = f;
+        }
     return out;
 }
 

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "scene/animation.h"
 #include "scene/scene.h"
 
 namespace npt::scene::gltf {
@@ -44,6 +45,14 @@ void check_schema(const nlohmann::json& doc, const std::string& file);
 std::vector<Vec3> read_vec3(const Context& ctx, int accessor, const std::string& what);
 std::vector<Vec2> read_texcoords(const Context& ctx, int accessor, const std::string& what);
 std::vector<uint32_t> read_indices(const Context& ctx, int accessor, const std::string& what);
+// FLOAT components of an accessor of `type` (TINYGLTF_TYPE_SCALAR, _VEC3, _VEC4), flattened, as doubles.
+std::vector<double> read_floats(const Context& ctx, int accessor, int type, const std::string& what);
+
+// The file's node hierarchy at rest (TRS or matrix, parents from `children`), for animation.
+std::vector<AnimationNode> rest_nodes(const Context& ctx);
+// Checks every animation of the file and puts the one called `name` (empty: the first) in `out`, every
+// animation's name in `names`. False when the file has none (an error when `name` was given).
+bool read_animation(const Context& ctx, const std::string& name, Animation& out, std::vector<std::string>& names);
 
 // Converts every glTF material (and the textures it uses) into scene.materials / scene.textures, at a fixed
 // offset. One decoded texture per glTF image and colour space.

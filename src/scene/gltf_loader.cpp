@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "core/json_file.h"
+#include "scene/animation.h"
 #include "scene/gltf_internal.h"
 #include "scene/mesh_utils.h"
 
@@ -151,19 +152,25 @@ Mat4 local_transform(const Context& ctx, const tinygltf::Node& n, const std::str
     return t * r * s;
 }
 
-Vec3 column(const Mat4& m, int c) { return {float(m.m[0][c]), float(m.m[1][c]), float(m.m[2][c])}; }
-
 struct CameraCandidate {
     std::string node_name, camera_name;
     int camera = -1;
     Mat4 world;
+    int node = -1;
+    bool moving = false;  // under an animated node
 };
 
 class Flattener {
   public:
-    Flattener(const Context& ctx, Scene& scene) : m_ctx(ctx), m_scene(scene), m_materials(ctx, scene) {}
+    // `animation`: where objects under an animated node are recorded (null: the file has no animation).
+    Flattener(const Context& ctx, Scene& scene, SceneAnimation* animation)
+        : m_ctx(ctx), m_scene(scene), m_materials(ctx, scene), m_animation(animation) {
+        m_targeted.assign(ctx.model.nodes.size(), 0);
+        if (animation)
+            for (const AnimationChannel& c : animation->animation.channels) m_targeted[size_t(c.node)] = 1;
+    }
 
-    void node(int index, const Mat4& parent, std::set<int>& path) {
+    void node(int index, const Mat4& parent, std::set<int>& path, bool parent_moving = false) {
         const auto& model = m_ctx.model;
         if (index < 0 || size_t(index) >= model.nodes.size())
             throw Error(m_ctx.file + ": node " + std::to_string(index) + " does not exist");
@@ -174,15 +181,17 @@ class Flattener {
         const std::string label = n.name.empty() ? fmt::format("#{}", index) : n.name;
         const Mat4 world = parent * local_transform(m_ctx, n, label);
         if (!world.is_finite()) throw Error(m_ctx.file + ": node '" + label + "': transform is not finite");
+        const bool moving = parent_moving || m_targeted[size_t(index)];
+        m_moving = moving;
         if (n.mesh >= 0) mesh(n, index, label, world);
         if (n.camera >= 0) {
             if (size_t(n.camera) >= model.cameras.size())
                 throw Error(m_ctx.file + ": node '" + label + "': camera " + std::to_string(n.camera) +
                             " does not exist");
-            cameras.push_back({n.name, model.cameras[size_t(n.camera)].name, n.camera, world});
+            cameras.push_back({n.name, model.cameras[size_t(n.camera)].name, n.camera, world, index, moving});
         }
-        light(n, label, world);
-        for (int c : n.children) node(c, world, path);
+        light(n, index, label, world);
+        for (int c : n.children) node(c, world, path, moving);
         path.erase(index);
     }
 
@@ -246,6 +255,7 @@ class Flattener {
                 v.extras_json = model.nodes[size_t(node_index)].extras_json_string;
                 v.declared_in = m_ctx.file;
                 check_volume_placement(v, m_ctx.file + ": volume '" + v.name + "' (node '" + label + "')");
+                if (m_moving) m_animation->volumes.push_back({m_scene.volumes.size(), node_index});
                 m_scene.volumes.push_back(std::move(v));
                 continue;
             }
@@ -255,12 +265,13 @@ class Flattener {
                              label);
                 continue;
             }
+            if (m_moving) m_animation->meshes.push_back({m_scene.meshes.size(), node_index, mesh});
             transform_mesh(mesh, world, where);
             m_scene.meshes.push_back(std::move(mesh));
         }
     }
 
-    void light(const tinygltf::Node& n, const std::string& label, const Mat4& world) {
+    void light(const tinygltf::Node& n, int node_index, const std::string& label, const Mat4& world) {
         auto it = n.extensions.find("KHR_lights_punctual");
         if (it == n.extensions.end() || !it->second.Has("light")) return;
         const auto& lv = it->second.Get("light");
@@ -300,12 +311,16 @@ class Flattener {
                         "': colour or intensity is not finite as a float");
         check_world_point(l.position, m_ctx.file + ": light '" + l.name + "' (node '" + label + "')",
                           "position");
+        if (m_moving) m_animation->lights.push_back({m_scene.lights.size(), node_index});
         m_scene.lights.push_back(l);
     }
 
     const Context& m_ctx;
     Scene& m_scene;
     gltf::MaterialTable m_materials;
+    SceneAnimation* m_animation;
+    std::vector<char> m_targeted;  // per node: a channel of the animation targets it
+    bool m_moving = false;         // the node being flattened is under an animated node
     bool m_warned_mode = false;
 };
 
@@ -318,18 +333,7 @@ Camera make_camera(const Context& ctx, const CameraCandidate& c) {
         throw Error(ctx.file + ": camera '" + label + "': unknown type '" + gc.type + "'");
     Camera cam;
     cam.name = label;
-    cam.position = c.world.transform_point(Vec3(0.0f));
-    check_world_point(cam.position, ctx.file + ": camera '" + label + "'", "position");
-    // Strip scale and shear: forward from -Z, right from X made orthogonal to it, up completes the frame.
-    Vec3 f = -column(c.world, 2), x = column(c.world, 0);
-    if (!(length(f) > 0.0f)) throw Error(ctx.file + ": camera '" + label + "': node transform is degenerate");
-    f = normalize(f);
-    Vec3 r = x - f * dot(x, f);
-    if (!(length(r) > 1e-12f))
-        throw Error(ctx.file + ": camera '" + label + "': node transform is degenerate");
-    cam.forward = f;
-    cam.right = normalize(r);
-    cam.up = cross(cam.right, cam.forward);
+    place_camera(cam, c.world, ctx.file + ": camera '" + label + "'");
     cam.yfov = float(gc.perspective.yfov);
     cam.aspect = float(gc.perspective.aspectRatio);
     if (!(cam.yfov > 0.0f && cam.yfov < k_pi))
@@ -354,6 +358,12 @@ void apply_extras(const Context& ctx, const tinygltf::Value& extras, Scene& scen
     get_int("height", scene.settings.height, 1);
     get_int("spp", scene.settings.spp, 1);
     get_int("max_depth", scene.settings.max_depth, 0);
+    if (extras.Has("fps")) {
+        const auto& f = extras.Get("fps");
+        if (!f.IsNumber() || !(f.GetNumberAsDouble() > 0) || !(f.GetNumberAsDouble() <= 1000))
+            throw Error(ctx.file + ": scene extras.fps: expected a number of frames per second in (0, 1000]");
+        scene.settings.fps = f.GetNumberAsDouble();
+    }
     if (extras.Has("transparent")) {
         const auto& t = extras.Get("transparent");
         if (!t.IsBool()) throw Error(ctx.file + ": scene extras.transparent: expected true or false");
@@ -395,7 +405,19 @@ void load_gltf(const fs::path& path, const LoadOptions& options, Scene& scene, c
             if (!child[i]) roots.push_back(int(i));
     }
 
-    Flattener flat(ctx, scene);
+    auto animation = std::make_shared<SceneAnimation>();
+    const bool animated = gltf::read_animation(ctx, options.animation_name, animation->animation, animation->names);
+    if (animated && scene.animation) {
+        spdlog::warn("{}: the scene already has an animation (from {}); this file's animations are ignored", ctx.file,
+                     scene.animation->file);
+    }
+    const bool keep = animated && !scene.animation;
+    if (keep) {
+        animation->file = ctx.file;
+        animation->nodes = gltf::rest_nodes(ctx);
+        animation->placement = placement;
+    }
+    Flattener flat(ctx, scene, keep ? animation.get() : nullptr);
     std::set<int> path_nodes;
     for (int r : roots) flat.node(r, placement, path_nodes);
 
@@ -422,9 +444,11 @@ void load_gltf(const fs::path& path, const LoadOptions& options, Scene& scene, c
             spdlog::warn("{}: orthographic camera '{}' is ignored", ctx.file, cands[i].node_name);
             continue;
         }
+        if (keep && cands[i].moving) animation->cameras.push_back({scene.cameras.size(), cands[i].node});
         scene.cameras.push_back(make_camera(ctx, cands[i]));
         if (i == chosen) scene.camera = int(scene.cameras.size()) - 1;
     }
+    if (keep) scene.animation = std::move(animation);
 }
 
 }  // namespace npt::scene

@@ -123,6 +123,7 @@ void read_volume(const Reader& r, const json& v, const std::string& field, const
 }
 
 void load_include(const Reader& r, const json& inc, const std::string& field, const fs::path& dir,
+                  const std::string& animation_name,
                   Scene& scene) {
     std::string rel;
     Mat4 m;
@@ -151,7 +152,7 @@ void load_include(const Reader& r, const json& inc, const std::string& field, co
         if (ext == ".obj")
             load_obj(p, scene, m);
         else
-            load_gltf(p, LoadOptions{}, scene, m);
+            load_gltf(p, LoadOptions{"", animation_name}, scene, m);
     } catch (const Error& e) {
         r.fail(field, e.what());
     }
@@ -227,7 +228,11 @@ void read_environment(const Reader& r, const json& e, const fs::path& dir, Scene
 
 void read_render(const Reader& r, const json& j, RenderSettings& s) {
     if (!j.is_object()) r.fail("render", "expected an object");
-    r.check_keys(j, "render", {"width", "height", "spp", "max_depth", "seed", "transparent"});
+    r.check_keys(j, "render", {"width", "height", "spp", "max_depth", "seed", "transparent", "fps"});
+    if (j.contains("fps")) {
+        s.fps = r.number(j["fps"], "render.fps");
+        if (!(s.fps > 0 && s.fps <= 1000)) r.fail("render.fps", "expected frames per second in (0, 1000]");
+    }
     if (j.contains("width")) s.width = r.integer(j["width"], "render.width", 1, k_max_image_side);
     if (j.contains("height")) s.height = r.integer(j["height"], "render.height", 1, k_max_image_side);
     if (j.contains("spp")) s.spp = r.integer(j["spp"], "render.spp", 1, 1 << 24);
@@ -255,7 +260,7 @@ void load_json_scene(const fs::path& path, const LoadOptions& options, Scene& sc
         const json& inc = root["include"];
         if (!inc.is_array()) r.fail("include", "expected an array of files");
         for (size_t i = 0; i < inc.size(); ++i)
-            load_include(r, inc[i], "include[" + std::to_string(i) + "]", dir, scene);
+            load_include(r, inc[i], "include[" + std::to_string(i) + "]", dir, options.animation_name, scene);
     }
     if (root.contains("volumes")) {
         const json& vols = root["volumes"];

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -105,7 +106,10 @@ struct RenderSettings {
     int max_depth = 16;
     uint64_t seed = 0;
     bool transparent = false;  // Film > Transparent: RGBA without the background (`nerfpt render --transparent`)
+    double fps = 24.0;         // frames per second of a sequence (scene extras "fps"; `--fps` overrides)
 };
+
+struct SceneAnimation;  // scene/animation.h
 
 struct Scene {
     std::filesystem::path source;
@@ -121,12 +125,16 @@ struct Scene {
     // Every scene file read (the scene, included files, MTL files, glTF buffers; textures are in `textures`,
     // grids in `volumes`), so that a command can refuse to write over one of them.
     std::vector<std::filesystem::path> files;
+    // The animation the scene moves by (scene/animation.h: pose_scene), null when the file has none. Shared so
+    // that a Scene stays copyable; a copy that is posed changes the other's bindings' state, not its objects.
+    std::shared_ptr<SceneAnimation> animation;
 
     size_t triangle_count() const;
 };
 
 struct LoadOptions {
-    std::string camera_name;  // empty: the first camera
+    std::string camera_name;     // empty: the first camera
+    std::string animation_name;  // empty: the file's first animation (glTF `animations[].name`)
 };
 
 // Loads .gltf, .glb, .obj or .json (our scene format) by extension. Throws npt::Error naming file and field.

@@ -1,6 +1,7 @@
 #include "render/backend/render_backend.h"
 
 #include "core/error.h"
+#include "render/cpu/cpu_renderer.h"
 
 #if NERFPT_HAVE_OPTIX
 #include "nerf/cuda/cuda_device.h"
@@ -50,15 +51,17 @@ namespace {
 
 class CpuSceneRenderer final : public SceneRenderer {
   public:
-    explicit CpuSceneRenderer(const scene::Scene& scene) : m_scene(scene) {}
+    CpuSceneRenderer(const scene::Scene& scene, const RenderOptions& resolved)
+        : m_renderer(scene, resolved.width, resolved.height) {}
+    void update(const scene::PoseChanges& changes) override { m_renderer.update(changes); }
     Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised,
                  AovImages* aovs) override {
         if (denoised) throw Error("--denoise: the denoiser is OptiX's and needs --backend optix");
-        return render::render(m_scene, resolved, progress, aovs);
+        return m_renderer.render(resolved, progress, aovs);
     }
 
   private:
-    const scene::Scene& m_scene;
+    cpu::CpuFrameRenderer m_renderer;
 };
 
 #if NERFPT_HAVE_OPTIX
@@ -66,6 +69,7 @@ class OptixSceneRenderer final : public SceneRenderer {
   public:
     OptixSceneRenderer(const scene::Scene& scene, const RenderOptions& resolved)
         : m_renderer(scene, resolved.width, resolved.height) {}
+    void update(const scene::PoseChanges& changes) override { m_renderer.update(changes); }
     Image render(const RenderOptions& resolved, const ProgressFn& progress, Image* denoised,
                  AovImages* aovs) override {
         return m_renderer.render(resolved, progress, denoised, aovs);
@@ -84,7 +88,7 @@ std::unique_ptr<SceneRenderer> prepare_renderer(const scene::Scene& scene, const
     if (resolved.backend == "optix") return std::make_unique<OptixSceneRenderer>(scene, resolved);
 #endif
     if (resolved.backend == "optix") throw Error("--backend optix: " + optix_unavailable_reason());
-    return std::make_unique<CpuSceneRenderer>(scene);
+    return std::make_unique<CpuSceneRenderer>(scene, resolved);
 }
 
 Image render_with_backend(const scene::Scene& scene, const RenderOptions& resolved, const ProgressFn& progress,

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "render/renderer.h"
+#include "scene/animation.h"
 
 namespace npt::render {
 
@@ -16,12 +17,14 @@ bool optix_backend_built();
 // "optix" (npt::Error naming the reason when it cannot be used: no silent fallback).
 std::string choose_render_backend(const std::string& requested, std::string* note);
 
-// A scene prepared for many renders at one resolution (frames of an animation or a viewer, benchmarks): on
-// OptiX the scene, acceleration structure and pipeline are built once; the CPU backend builds its Embree scene
-// per render, as render() does.
+// A scene prepared for many renders at one resolution (frames of an animation or a viewer, benchmarks): the scene
+// data, volumes and acceleration structures (and on OptiX the pipeline) are built once; update() follows
+// scene::pose_scene and touches only what moved.
 class SceneRenderer {
   public:
     virtual ~SceneRenderer() = default;
+    // After scene::pose_scene moved the scene this renderer was prepared from.
+    virtual void update(const scene::PoseChanges& changes) = 0;
     // Renders `resolved` (its width and height must be the prepared ones); see render_with_backend.
     virtual Image render(const RenderOptions& resolved, const ProgressFn& progress = {},
                          Image* denoised = nullptr, AovImages* aovs = nullptr) = 0;

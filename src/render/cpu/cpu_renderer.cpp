@@ -9,6 +9,7 @@
 #include <atomic>
 #include <mutex>
 
+#include "core/error.h"
 #include "core/memory.h"
 #include "render/camera.h"
 #include "render/cpu/embree_scene.h"
@@ -21,13 +22,32 @@ namespace {
 constexpr int k_tile = 16;
 }
 
+CpuFrameRenderer::CpuFrameRenderer(const scene::Scene& scene, int width, int height)
+    : m_scene(scene),
+      m_data(std::make_unique<SceneData>(scene, width, height)),
+      m_embree(std::make_unique<EmbreeScene>(scene)),
+      m_width(width),
+      m_height(height) {}
+
+CpuFrameRenderer::~CpuFrameRenderer() = default;
+
+void CpuFrameRenderer::update(const scene::PoseChanges& changes) {
+    m_embree->update(m_scene, changes);
+    m_data->update(m_scene, changes);
+}
+
 Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const ProgressFn& progress,
                  AovImages* aovs) {
+    return CpuFrameRenderer(scene, options.width, options.height).render(options, progress, aovs);
+}
+
+Image CpuFrameRenderer::render(const RenderOptions& options, const ProgressFn& progress, AovImages* aovs) {
     const int width = options.width, height = options.height, spp = options.spp;
-    SceneData data(scene, width, height);
-    EmbreeScene embree(scene);
-    EmbreeTracer tracer(embree);
-    const SceneView& sv = data.view();
+    if (width != m_width || height != m_height)
+        throw Error("render: " + std::to_string(width) + "x" + std::to_string(height) + " asked of a renderer prepared for " +
+                    std::to_string(m_width) + "x" + std::to_string(m_height));
+    EmbreeTracer tracer(*m_embree);
+    const SceneView& sv = m_data->view();
     PathSettings ps;
     ps.max_depth = options.max_depth;
     ps.transparent_background = options.transparent;

@@ -2,9 +2,36 @@
 // the seed only, never on the thread count or the order tiles run in).
 #pragma once
 
+#include <memory>
+
+#include "render/scene_data.h"
+
 #include "render/renderer.h"
+#include "scene/animation.h"
 
 namespace npt::render::cpu {
+
+class EmbreeScene;
+
+// A scene prepared once (scene data, volumes' grids or models, Embree's BVH) for many renders at one resolution:
+// the frames of a sequence. update() follows scene::pose_scene, touching only what moved. The scene must
+// outlive it.
+class CpuFrameRenderer {
+  public:
+    CpuFrameRenderer(const scene::Scene& scene, int width, int height);
+    ~CpuFrameRenderer();
+    CpuFrameRenderer(const CpuFrameRenderer&) = delete;
+    CpuFrameRenderer& operator=(const CpuFrameRenderer&) = delete;
+    void update(const scene::PoseChanges& changes);
+    // options' width and height must be the prepared ones.
+    Image render(const RenderOptions& options, const ProgressFn& progress, AovImages* aovs = nullptr);
+
+  private:
+    const scene::Scene& m_scene;
+    std::unique_ptr<SceneData> m_data;
+    std::unique_ptr<EmbreeScene> m_embree;
+    int m_width, m_height;
+};
 
 // render::render's CPU half (renderer.h): RGB or, with options.transparent, RGBA; the AOVs into *aovs.
 Image render_cpu(const scene::Scene& scene, const RenderOptions& options, const ProgressFn& progress,

@@ -7,19 +7,27 @@
 
 #include <cassert>
 
+#include <vector>
+
 #include "render/surface.h"
+#include "scene/animation.h"
 #include "scene/scene.h"
 
 namespace npt::render::cpu {
 
 class EmbreeScene {
   public:
+    // Meshes an animation moves are built for refitting, in a dynamic scene (Embree's two levels: only the
+    // moved geometries' BVHs are touched on a commit).
     explicit EmbreeScene(const scene::Scene& scene);
     ~EmbreeScene();
     EmbreeScene(const EmbreeScene&) = delete;
     EmbreeScene& operator=(const EmbreeScene&) = delete;
 
     RTCScene handle() const { return m_scene; }
+    // After scene::pose_scene: copies the moved meshes' vertices and indices into their geometries, refits
+    // those, and commits the scene.
+    void update(const scene::Scene& scene, const scene::PoseChanges& changes);
 
   private:
     RTCDevice m_device = nullptr;

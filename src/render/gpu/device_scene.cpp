@@ -111,6 +111,28 @@ DeviceVolumes::DeviceVolumes(Span<const media::VolumeView> host, bool grid_textu
     m_views.upload(views);
 }
 
+void DeviceVolumes::set_placements(Span<const media::VolumeView> host) {
+    std::vector<media::VolumeView> views = m_views.download();
+    for (size_t i = 0; i < views.size() && i < host.size; ++i) {
+        views[i].world_to_local = host[i].world_to_local;
+        views[i].density_scale = host[i].density_scale;
+    }
+    m_views.upload(views);  // the same size: the device pointers the scene view holds stay valid
+}
+
+void DeviceScene::update(const render::SceneView& host, const std::vector<size_t>& moved_meshes, bool volumes_moved) {
+    for (size_t i : moved_meshes) {
+        const render::MeshView& m = host.meshes[i];
+        m_positions[i].upload(m.positions, m_positions[i].size());
+        m_indices[i].upload(m.indices, m_indices[i].size());
+        if (m.normals) m_normals[i].upload(m.normals, m_normals[i].size());
+    }
+    if (volumes_moved) m_volumes.set_placements(host.volumes);
+    m_lights = DeviceLightSet(host.lights);
+    m_view.lights = m_lights.view();
+    m_view.camera = host.camera;
+}
+
 DeviceScene::DeviceScene(const render::SceneView& host, bool grid_textures)
     : m_lights(host.lights), m_volumes(host.volumes, grid_textures), m_view(host) {
     std::vector<render::MeshView> meshes(host.meshes.data, host.meshes.data + host.meshes.size);

@@ -54,6 +54,8 @@ class DeviceVolumes {
   public:
     explicit DeviceVolumes(Span<const media::VolumeView> host, bool grid_textures = false);
     Span<const media::VolumeView> view() const { return span_of(m_views); }
+    // An animation frame: each volume's placement (world_to_local, density_scale) from `host`, the rest kept.
+    void set_placements(Span<const media::VolumeView> host);
 
   private:
     std::vector<std::unique_ptr<GridTexture>> m_textures;
@@ -74,6 +76,10 @@ class DeviceScene {
     const DeviceBuffer<Vec3>& positions(size_t mesh) const { return m_positions[mesh]; }
     const DeviceBuffer<uint32_t>& indices(size_t mesh) const { return m_indices[mesh]; }
     size_t mesh_count() const { return m_positions.size(); }
+    // An animation frame (`host` is SceneData's view after its update): the moved meshes' vertices, normals and
+    // indices uploaded into their buffers (same sizes: rigid motion), the light set rebuilt, the volumes'
+    // placements and the camera. The acceleration structure over the meshes is the caller's to rebuild.
+    void update(const render::SceneView& host, const std::vector<size_t>& moved_meshes, bool volumes_moved);
 
   private:
     std::vector<DeviceBuffer<Vec3>> m_positions, m_normals;

@@ -93,7 +93,7 @@ static uint32_t slots_for(size_t pixels, uint32_t spp) {
 
 struct OptixRenderer::State {
     State(const scene::Scene& scene, int w, int h)
-        : width(w), height(h), data(scene, w, h), dev(data.view(), use_grid_textures()),
+        : scene(scene), width(w), height(h), data(scene, w, h), dev(data.view(), use_grid_textures()),
           accel(ctx.get(), dev, stream.s),
           programs(ctx.get(), accel.input_meshes()) {
         if (data.view().volumes.size > 0 && use_wavefront(data.view().volumes)) {
@@ -103,6 +103,7 @@ struct OptixRenderer::State {
             if (!wavefront->useful()) wavefront.reset();
         }
     }
+    const scene::Scene& scene;
     int width, height;
     render::SceneData data;
     DeviceScene dev;
@@ -136,6 +137,15 @@ OptixRenderer::OptixRenderer(const scene::Scene& scene, int width, int height) {
 }
 
 OptixRenderer::~OptixRenderer() = default;
+
+void OptixRenderer::update(const scene::PoseChanges& changes) {
+    if (!changes.any()) return;
+    m->data.update(m->scene, changes);
+    m->dev.update(m->data.view(), changes.meshes, changes.volumes);
+    // A rebuild, not a refit: the GAS is compacted (refitting needs OPTIX_BUILD_FLAG_ALLOW_UPDATE and the
+    // uncompacted size), and a rigid mesh that turns makes a refitted BVH's boxes loose.
+    if (!changes.meshes.empty()) m->accel = OptixAccel(m->ctx.get(), m->dev, m->stream.s);
+}
 
 Image OptixRenderer::render(const render::RenderOptions& options, const render::ProgressFn& progress,
                             Image* denoised, render::AovImages* aovs) {

@@ -1,0 +1,163 @@
+#include "render_sequence.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+
+#include "core/error.h"
+#include "core/image_io.h"
+#include "core/progress.h"
+#include "dist/frames.h"
+#include "interrupt.h"
+#include "render/backend/render_backend.h"
+#include "render/scene_data.h"
+#include "render_outputs.h"
+#include "scene/animation.h"
+#include "scene/scene.h"
+
+namespace npt::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+// The frame's header: fps, the camera (OpenEXR's worldToCamera: row vectors, x right, y up, z the viewing
+// direction) and nerfpt's own frame number, time, vertical field of view and seed.
+ExrMetadata frame_metadata(const render::CameraView& cam, int frame, double time, double fps, uint64_t seed) {
+    ExrMetadata m;
+    m.fps = fps;
+    m.has_camera = true;
+    const Vec3 axes[3] = {cam.right, cam.up, cam.forward};
+    for (int i = 0; i < 3; ++i) {
+        m.world_to_camera[0][i] = axes[i].x;
+        m.world_to_camera[1][i] = axes[i].y;
+        m.world_to_camera[2][i] = axes[i].z;
+        m.world_to_camera[3][i] = -dot(axes[i], cam.position);
+    }
+    m.world_to_camera[3][3] = 1.0f;
+    m.ints.push_back({"nerfpt.frame", frame});
+    m.floats.push_back({"nerfpt.time", float(time)});
+    m.floats.push_back({"nerfpt.yfov", float(2.0 * std::atan(double(cam.tan_half_fov_y)))});
+    m.strings.push_back({"nerfpt.seed", std::to_string(seed)});
+    return m;
+}
+
+}  // namespace
+
+int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    if (args.denoise) throw Error("--denoise: not available with --frames yet (render the frames as stills)");
+    if (args.backend == "optix") render::choose_render_backend(args.backend, nullptr);  // fails before loading
+    const fs::path pattern = args.output;
+    if (!dist::has_frame_pattern(pattern))
+        throw Error("--output '" + pattern.string() + "': a sequence needs #### in the file name (shot.####.exr)");
+    const dist::FrameRange range = dist::parse_frame_range(args.frames);
+    const std::vector<int> shot = range.frames();
+    const dist::TaskSlot task = dist::resolve_task(args.task_index >= 0 ? std::optional<int>(args.task_index) : std::nullopt,
+                                                   args.task_count >= 0 ? std::optional<int>(args.task_count) : std::nullopt,
+                                                   [](const char* name) -> const char* { return std::getenv(name); });
+    const std::vector<int> frames = dist::task_frames(shot, task.index, task.count);
+    check_output(dist::frame_path(pattern, range.first));
+    const uint32_t aov_mask = args.aovs.empty() ? 0u : render::parse_aov_list(args.aovs);
+
+    render::RenderOptions options;
+    if (!args.res.empty()) parse_resolution(args.res, &options.width, &options.height);
+    options.spp = args.spp;
+    options.max_depth = args.max_depth;
+    options.threads = args.threads;
+    options.transparent = args.transparent;
+    options.aovs = aov_mask;
+
+    scene::LoadOptions load;
+    load.camera_name = args.camera;
+    load.animation_name = args.animation;
+    scene::Scene scene = scene::load_scene(args.scene, load);
+    const std::vector<InputFile> inputs = scene_inputs(scene);
+    for (int f : frames) {
+        fs::path exr = dist::frame_path(pattern, f), png = exr;
+        png.replace_extension(".png");
+        refuse_overwriting_inputs(exr, "--output", inputs);
+        refuse_overwriting_inputs(png, "--output", inputs);
+        if (args.aov_files)
+            for (const AovFile& a : aov_file_paths(exr, aov_mask)) refuse_overwriting_inputs(a.path, "--aov-files", inputs);
+    }
+    const uint64_t seed = args.seed_given ? args.seed : scene.settings.seed;
+    options.seed = seed;
+    const double fps = args.fps > 0 ? args.fps : scene.settings.fps;
+    std::string note;
+    options.backend = render::choose_render_backend(args.backend, &note);
+    if (!note.empty()) spdlog::info("{}", note);
+    const render::RenderOptions resolved = render::resolve_options(scene, options);
+    if (!scene.animation)
+        spdlog::warn("{}: the scene has no animation: every frame is the same view (with its own noise)", args.scene);
+
+    // What is left: frames whose EXR is not already whole (the EXR is written last, so a whole EXR means a
+    // finished frame).
+    std::vector<int> todo;
+    for (int f : frames)
+        if (args.overwrite || !exr_reads_back_whole(dist::frame_path(pattern, f), resolved.width, resolved.height))
+            todo.push_back(f);
+    const std::string task_text =
+        task.count > 1 ? fmt::format("task {} of {}: ", task.index, task.count) : std::string();
+    spdlog::info("{}{} of {} frames to render ({} already done), {}x{}, {} spp, {} fps, backend {}", task_text,
+                 todo.size(), frames.size(), frames.size() - todo.size(), resolved.width, resolved.height, resolved.spp,
+                 fps, resolved.backend);
+    if (scene.animation)
+        spdlog::info("animation '{}': {:.3f} s to {:.3f} s (frames {:.1f} to {:.1f})", scene.animation->animation.name,
+                     scene.animation->animation.start, scene.animation->animation.end,
+                     scene.animation->animation.start * fps, scene.animation->animation.end * fps);
+    if (todo.empty()) {
+        fmt::print("nothing to render: {} frames already written (--overwrite renders them again)\n", frames.size());
+        return 0;
+    }
+
+    // Prepared once, at the file's rest pose, whichever frame comes first: every process builds the same
+    // structures and poses them to its frame, so a frame is the same image whichever task renders it.
+    const auto renderer = render::prepare_renderer(scene, resolved);
+    ProgressSettings ps;
+    ps.style = progress_style(stream_is_tty(stderr), global.quiet);
+    const auto t_shot = std::chrono::steady_clock::now();
+    size_t done = 0;
+    for (int f : todo) {
+        const double time = scene::frame_time(f, fps);
+        renderer->update(scene::pose_scene(scene, time));
+        render::RenderOptions frame_options = resolved;
+        frame_options.seed = dist::frame_seed(seed, f);
+        const fs::path exr = dist::frame_path(pattern, f);
+        fs::path png = exr;
+        png.replace_extension(".png");
+        Progress progress(ps, std::cerr);
+        const auto t0 = std::chrono::steady_clock::now();
+        render::AovImages aovs;
+        const Image image = renderer->render(
+            frame_options, [&progress](uint64_t d, uint64_t total) { progress.update(d, total); }, nullptr, &aovs);
+        progress.finish();
+        const ExrMetadata meta =
+            frame_metadata(render::make_camera_view(scene, resolved.width, resolved.height), f, time, fps, frame_options.seed);
+        {
+            auto no_interrupt = interrupts.hold();  // whole files only: an interrupt waits for this frame's writes
+            if (image.channels == 4)
+                write_png_premultiplied(png, image, args.exposure);
+            else
+                write_png(png, image, args.exposure);
+            if (args.aov_files)
+                for (const AovFile& a : aov_file_paths(exr, aov_mask)) write_aov_file(a, aovs);
+            write_exr_layers(exr, image, aov_layers(aovs, aov_mask), &meta);  // last: it marks the frame done
+        }
+        ++done;
+        const double frame_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const double shot_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_shot).count();
+        const double left_s = shot_s / double(done) * double(todo.size() - done);
+        fmt::print("wrote {} (frame {}, {:.3f} s) in {}; {}{} of {} frames, {} left\n", exr.string(), f, time,
+                   format_seconds(frame_s), task_text, done + (frames.size() - todo.size()), frames.size(),
+                   format_seconds(left_s));
+        std::fflush(stdout);
+    }
+    fmt::print("rendered {} frames in {}\n", done,
+               format_seconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - t_shot).count()));
+    return 0;
+}
+
+}  // namespace npt::cli
