@@ -135,12 +135,14 @@ def build_relit_material(name):
     with a black Absorption Color has scattering sigma x color and absorption sigma x (1 - color), so its
     extinction is sigma on every channel, as in nerfpt (the same transmittance, the same shadows). What differs
     is the event: nerfpt shades it with a surface BSDF (the albedo, roughness and normal of the intrinsic
-    field), Cycles volumes can only scatter isotropically (anisotropy 0) -- docs/blender.md measures how close
-    that comes."""
+    field), Cycles volumes can only scatter isotropically (anisotropy 0), many times inside the object's skin.
+    The albedo is used as the single-scattering albedo as it is: mapping it to the single-scattering albedo
+    whose dense isotropic medium reflects as much (van de Hulst) made the preview twice as bright as nerfpt's
+    render, the albedo itself 10-15% darker (docs/blender.md, "Relightable captures")."""
     mat, nt, out = _new_material(name)
     sigma = _sigma(nt)
     color = _attribute(nt, "color", "GEOMETRY", (200, -250))
-    pv = nt.nodes.new("ShaderNodePrincipledVolume")
+    pv = nt.nodes.new("ShaderNodeVolumePrincipled")
     pv.location = (550, 0)
     # Our sigma already holds the density grid: no attribute multiplies it again.
     pv.inputs["Density Attribute"].default_value = ""
