@@ -57,7 +57,8 @@ CLI::App* add_bake_command(CLI::App& app, BakeArgs& args) {
         "z, x, y (training-world x, y, z). .vdb/.nvdb: grids 'density' (sigma per local unit) and 'color'\n"
         "(linear RGB); raw: float32 R,G,B (sRGB),sigma (per model unit). Only voxels in occupied cells with\n"
         "sigma >= --threshold are stored (raw: written as 0). Colour is baked for one direction or "
-        "averaged:\n"
+        "averaged\n"
+        "(--colour radiance), or is a relightable model's albedo (--colour albedo, metadata nerfpt_colour):\n"
         "view-dependent effects (highlights, reflections) are lost in a bake. See docs/formats.md.\n"
         "Example: nerfpt bake out/lego.npt -o out/lego.vdb --res 256");
     cmd->add_option("MODEL", args.model, "Trained model file (.npt)")->required();
@@ -81,6 +82,11 @@ CLI::App* add_bake_command(CLI::App& app, BakeArgs& args) {
                     "avg: colour averaged over 16 directions; or x,y,z: the colour seen looking along this "
                     "direction (training-world axes). View-dependent effects are lost either way "
                     "(default: avg)");
+    cmd->add_option("--colour", args.colour,
+                    "radiance: the trained colour (the capture's light), for emission; albedo: a relightable "
+                    "model's diffuse albedo (linear), for a renderer that scatters light with the grid "
+                    "(default: radiance)")
+        ->check(CLI::IsMember({"radiance", "albedo"}));
     cmd->add_option("--threshold", args.threshold,
                     "Drop voxels with sigma below this (per model unit); default: occupancy.threshold / "
                     "(8 * min_step), 0.74 with the default config")
@@ -112,10 +118,12 @@ int run_bake(const BakeArgs& args, const GlobalSettings& global, InterruptGuard&
         settings.direction = Vec3(v[0], v[1], v[2]);
     }
     if (args.threshold >= 0.0f) settings.threshold = args.threshold;
+    settings.colour = args.colour == "albedo" ? bake::BakeColour::albedo : bake::BakeColour::radiance;
     std::optional<tbb::global_control> threads;
     if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
 
     const nerf::NerfModel model = nerf::load_model(args.model);
+    bake::check_colour_settings(model, settings, args.model);
     const bake::BakeLayout layout = bake::make_bake_layout(model, settings);
     if (format == bake::GridFormat::raw) {
         bake::check_raw_size(layout);

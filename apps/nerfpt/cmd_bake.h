@@ -17,6 +17,7 @@ struct BakeArgs {
     std::string crop;    // "x0,y0,z0,x1,y1,z1"; empty: the model's box
     std::string format;  // vdb | nvdb | raw; empty: from the extension
     std::string direction = "avg";
+    std::string colour = "radiance";  // radiance | albedo
     float threshold = -1.0f;  // < 0: the default
     int threads = 0;
     std::string backend;  // "", cpu or cuda (backend_option.h)

@@ -188,9 +188,12 @@ def _volume_extras(obj, world, gltf_dir, absolute_paths, notes):
     s = obj.nerfpt_volume
     grid = os.path.abspath(bpy.path.abspath(obj.data.filepath))
     model = os.path.abspath(bpy.path.abspath(s.model_path)) if s.model_path else ""
-    use_model = s.source == "MODEL" and model
+    relit = s.shading == "RELIT" and model
+    use_model = (s.source == "MODEL" or relit) and model
     if s.source == "MODEL" and not model:
         notes.append(f"capture '{obj.name}' has no model file: its grid is rendered")
+    if relit and s.source == "GRID":
+        notes.append(f"capture '{obj.name}' is relit: nerfpt renders its model (a grid cannot be relit)")
     path = model if use_model else grid
     if not os.path.isfile(path):
         raise NerfptError(f"capture '{obj.name}': file '{path}' not found")
@@ -217,6 +220,10 @@ def _volume_extras(obj, world, gltf_dir, absolute_paths, notes):
         "casts_shadows": bool(s.casts_shadows),
         "step_voxels": s.step_voxels,
     }
+    if use_model:
+        # Said even where it is nerfpt's default (relit for a relightable model): the export means what the
+        # Blender object shows, whatever the default becomes.
+        volume["shading"] = "relit" if relit else "emissive"
     if use_model and s.use_crop:
         volume["crop"] = {"min": list(s.crop_min), "max": list(s.crop_max)}
     return {"volume": volume}

@@ -34,9 +34,9 @@ def bake_folder(model_path):
     return bpy.utils.user_resource("DATAFILES", path="nerfpt_bakes", create=True)
 
 
-def bake_path(model_path, resolution, crop):
+def bake_path(model_path, resolution, crop, albedo=False):
     stem = os.path.splitext(os.path.basename(model_path))[0]
-    tag = f".bake{resolution}"
+    tag = f".{'albedo' if albedo else 'bake'}{resolution}"
     if crop:
         tag += "_crop_" + "_".join(f"{v:g}" for v in (*crop[0], *crop[1])).replace("-", "m")
     return os.path.join(bake_folder(model_path), stem + tag + ".vdb")
@@ -45,7 +45,8 @@ def bake_path(model_path, resolution, crop):
 def create_capture(
     context, name, grid_path, model_path="", location=(0, 0, 0), scale=(1, 1, 1), settings=None
 ):
-    """A Volume object for grid_path with the nerfpt material and settings; selected and active."""
+    """A Volume object for grid_path with the nerfpt material and settings; selected and active. settings
+    'shading' RELIT: the grid holds a relightable model's albedo, shaded as a scattering volume."""
     volume = bpy.data.volumes.new(name)
     volume.filepath = grid_path
     if not volume.grids.load():
@@ -62,7 +63,8 @@ def create_capture(
     color = grids.get("color")
     has_color = color is not None and color.channels == 3
     volume_material.setup_volume_data(volume)
-    volume.materials.append(volume_material.volume_material(white=not has_color))
+    relit = (settings or {}).get("shading") == "RELIT"
+    volume.materials.append(volume_material.volume_material(white=not has_color, relit=relit and has_color))
 
     obj = bpy.data.objects.new(name, volume)
     context.collection.objects.link(obj)
@@ -123,10 +125,16 @@ class ImportJob:
             raise NerfptError(str(e)) from None
         self.model_path = self.filepath
         self.location, self.scale = place["centre"], place["half_size"]
-        self.settings["source"] = op.source
+        try:
+            relit = op.shading == "RELIT" and model_file.is_relightable(self.filepath)
+        except model_file.ModelFileError as e:
+            raise NerfptError(str(e)) from None
+        # A relit capture: nerfpt renders the model relit (a grid cannot be); Cycles and EEVEE its albedo.
+        self.settings["shading"] = "RELIT" if relit else "EMISSIVE"
+        self.settings["source"] = "MODEL" if relit else op.source
         if crop:
             self.settings.update(use_crop=True, crop_min=crop[0], crop_max=crop[1])
-        self.grid_path = bake_path(self.filepath, op.resolution, crop)
+        self.grid_path = bake_path(self.filepath, op.resolution, crop, albedo=relit)
         # The bake goes to a temporary name, renamed at the end: a cancelled or failed bake never replaces
         # (or deletes) a grid that another object uses.
         root, _ = os.path.splitext(self.grid_path)
@@ -136,6 +144,8 @@ class ImportJob:
         self.command += preferences.backend_args(context)
         if crop:
             self.command += ["--crop", ",".join(f"{v:.9g}" for v in (*crop[0], *crop[1]))]
+        if relit:
+            self.command += ["--colour", "albedo"]
 
     def bake_done(self, child):
         """After the child ended: raises NerfptError on failure, removes what a cancel left."""
@@ -200,6 +210,20 @@ class NERFPT_OT_import_model(bpy.types.Operator, ImportHelper):
         ],
         default="MODEL",
     )
+    shading: EnumProperty(
+        name="Shading",
+        description="For a relightable model (nerfpt train --relightable; others are always emissive)",
+        items=[
+            (
+                "RELIT",
+                "Relit",
+                "Lit by the scene's lights: nerfpt shades the model with its intrinsic BSDF; Cycles and EEVEE "
+                "scatter light with its albedo, baked (nerfpt bake --colour albedo)",
+            ),
+            ("EMISSIVE", "Emissive", "The capture's own light, baked in (as a model that is not relightable)"),
+        ],
+        default="RELIT",
+    )
     density_scale: FloatProperty(name="Density scale", default=1.0, min=0.0, soft_max=10.0)
     emission_scale: FloatProperty(name="Emission scale", default=1.0, min=0.0, soft_max=10.0)
     use_crop: BoolProperty(
@@ -215,7 +239,10 @@ class NERFPT_OT_import_model(bpy.types.Operator, ImportHelper):
         layout = self.layout
         layout.use_property_split = True
         layout.prop(self, "resolution")
-        layout.prop(self, "source")
+        layout.prop(self, "shading")
+        row = layout.row()
+        row.enabled = self.shading != "RELIT"
+        row.prop(self, "source")
         layout.prop(self, "density_scale")
         layout.prop(self, "emission_scale")
         layout.prop(self, "use_crop")

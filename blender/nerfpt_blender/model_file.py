@@ -2,7 +2,8 @@
 
 Pure Python (no bpy). The file layout is docs/formats.md, "Model file": magic 'NPTNERF1', u32 version, then
 sections (4-byte tag, u64 length, payload). Only 'SCEN' is read here (f32 aabb_scale, 16 f64 world_to_model, row
-major); the parameter arrays are skipped, so reading a large model takes no time.
+major); the parameter arrays are skipped, so reading a large model takes no time. A model with an 'RLIT' section
+(`nerfpt train --relightable`) is relightable.
 
 Placement (docs/formats.md, "NeRF models queried directly"): the crop box (model space; default the model's box
 0.5 -+ aabb_scale/2) maps axis by axis onto the volume cube's local box [-1, 1]^3, local x, y, z running along
@@ -21,19 +22,49 @@ class ModelFileError(Exception):
     pass
 
 
-def read_scene_section(path):
-    """(aabb_scale, world_to_model as 4 rows of 4 floats). Raises ModelFileError with a one-line message."""
+def _open_model(path):
     try:
         f = open(path, "rb")
     except OSError as e:
         raise ModelFileError(f"{path}: cannot open: {e.strerror or e}") from None
-    with f:
-        head = f.read(12)
-        if len(head) < 12 or head[:8] != MAGIC:
-            raise ModelFileError(f"{path}: not a nerfpt model file")
-        (version,) = struct.unpack("<I", head[8:])
-        if version != 1:
-            raise ModelFileError(f"{path}: unsupported model file version {version}")
+    head = f.read(12)
+    if len(head) < 12 or head[:8] != MAGIC:
+        f.close()
+        raise ModelFileError(f"{path}: not a nerfpt model file")
+    (version,) = struct.unpack("<I", head[8:])
+    if version != 1:
+        f.close()
+        raise ModelFileError(f"{path}: unsupported model file version {version}")
+    return f
+
+
+def section_tags(path):
+    """The tags of the model file's sections, in file order (payloads skipped, not checked)."""
+    tags = []
+    with _open_model(path) as f:
+        size = f.seek(0, 2)
+        pos = 12
+        while pos < size:
+            f.seek(pos)
+            sec = f.read(12)
+            if len(sec) < 12:
+                raise ModelFileError(f"{path}: truncated (section header)")
+            length = struct.unpack("<Q", sec[4:])[0]
+            if pos + 12 + length > size:
+                raise ModelFileError(f"{path}: truncated (section '{sec[:4].decode('latin-1')}')")
+            tags.append(sec[:4].decode("latin-1"))
+            pos += 12 + length
+    return tags
+
+
+def is_relightable(path):
+    """Whether the model carries the intrinsic fields (section 'RLIT', docs/formats.md "Model file")."""
+    return "RLIT" in section_tags(path)
+
+
+def read_scene_section(path):
+    """(aabb_scale, world_to_model as 4 rows of 4 floats). Raises ModelFileError with a one-line message."""
+    with _open_model(path) as f:
         while True:
             sec = f.read(12)
             if len(sec) == 0:

@@ -52,6 +52,23 @@ class NerfptVolumeSettings(bpy.types.PropertyGroup):
         ],
         default="MODEL",
     )
+    shading: EnumProperty(
+        name="Shading",
+        items=[
+            (
+                "EMISSIVE",
+                "Emissive",
+                "The capture's own light, baked in: an emission-absorption volume (nerfpt's \"emissive\")",
+            ),
+            (
+                "RELIT",
+                "Relit",
+                "A relightable model lit by the scene's lights: nerfpt shades it with its intrinsic BSDF; "
+                "Cycles and EEVEE scatter light with its baked albedo (chosen at import)",
+            ),
+        ],
+        default="EMISSIVE",
+    )
     density_scale: FloatProperty(
         name="Density scale",
         description="Multiplies the density (absorption coefficient); nerfpt's extras.volume.density_scale",

@@ -44,9 +44,16 @@ class DATA_PT_nerfpt_capture(bpy.types.Panel):
         s = context.object.nerfpt_volume
         if s.model_path:
             layout.prop(s, "model_path")
-            layout.prop(s, "source")
+            row = layout.row()
+            row.enabled = False  # chosen at import: the grid holds the albedo or the radiance
+            row.prop(s, "shading")
+            row = layout.row()
+            row.enabled = s.shading != "RELIT"  # a grid cannot be relit: nerfpt renders the model
+            row.prop(s, "source")
         layout.prop(s, "density_scale")
-        layout.prop(s, "emission_scale")
+        row = layout.row()
+        row.enabled = s.shading != "RELIT"  # a relit capture emits nothing
+        row.prop(s, "emission_scale")
         row = layout.row()
         row.enabled = not s.model_path  # a model's density is always per local (model) unit
         row.prop(s, "local_density")

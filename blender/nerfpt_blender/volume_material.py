@@ -26,6 +26,7 @@ import bpy
 
 MATERIAL_NAME = "nerfpt volume"
 MATERIAL_NAME_WHITE = "nerfpt volume (no colour grid)"
+MATERIAL_NAME_RELIT = "nerfpt volume (relit)"
 PROP = "nerfpt_volume"
 
 
@@ -49,19 +50,10 @@ def _attribute(nt, name, kind, location):
     return n
 
 
-def build_material(name, white=False):
-    """The shared volume material; every value it needs per object comes from the object's nerfpt_volume
-    settings (Attribute nodes of type Object), so one material serves every capture."""
-    mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    nt = mat.node_tree
-    nt.nodes.clear()
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
-    out.location = (900, 0)
-
+def _sigma(nt):
+    """The extinction coefficient per world unit: density x density_scale x |L^-1 d| (see "Units")."""
     density = _attribute(nt, "density", "GEOMETRY", (-800, 200))
     ds = _attribute(nt, PROP + ".density_scale", "OBJECT", (-800, 0))
-    es = _attribute(nt, PROP + ".emission_scale", "OBJECT", (-800, -200))
     local = _attribute(nt, PROP + ".local_density", "OBJECT", (-800, -400))
 
     # |L^-1 d|: local units per world unit along the ray.
@@ -91,13 +83,31 @@ def build_material(name, white=False):
         1.0,
         (0, -500),
     )
-    sigma = _math(
+    return _math(
         nt,
         "MULTIPLY",
         _math(nt, "MULTIPLY", density.outputs["Fac"], ds.outputs["Fac"], (-400, 150)),
         factor,
         (200, 100),
     )
+
+
+def _new_material(name):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    out.location = (900, 0)
+    return mat, nt, out
+
+
+def build_material(name, white=False):
+    """The shared volume material; every value it needs per object comes from the object's nerfpt_volume
+    settings (Attribute nodes of type Object), so one material serves every capture."""
+    mat, nt, out = _new_material(name)
+    sigma = _sigma(nt)
+    es = _attribute(nt, PROP + ".emission_scale", "OBJECT", (-800, -200))
 
     absorb = nt.nodes.new("ShaderNodeVolumeAbsorption")
     absorb.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
@@ -119,11 +129,40 @@ def build_material(name, white=False):
     return mat
 
 
-def volume_material(white=False):
-    name = MATERIAL_NAME_WHITE if white else MATERIAL_NAME
+def build_relit_material(name):
+    """A relightable capture for Cycles and EEVEE: a scattering volume whose single-scattering albedo is the
+    baked albedo grid (`nerfpt bake --colour albedo`) and whose extinction is nerfpt's sigma. Principled Volume
+    with a black Absorption Color has scattering sigma x color and absorption sigma x (1 - color), so its
+    extinction is sigma on every channel, as in nerfpt (the same transmittance, the same shadows). What differs
+    is the event: nerfpt shades it with a surface BSDF (the albedo, roughness and normal of the intrinsic
+    field), Cycles volumes can only scatter isotropically (anisotropy 0), many times inside the object's skin.
+    The albedo is used as the single-scattering albedo as it is: mapping it to the single-scattering albedo
+    whose dense isotropic medium reflects as much (van de Hulst) made the preview twice as bright as nerfpt's
+    render, the albedo itself 10-15% darker (docs/blender.md, "Relightable captures")."""
+    mat, nt, out = _new_material(name)
+    sigma = _sigma(nt)
+    color = _attribute(nt, "color", "GEOMETRY", (200, -250))
+    pv = nt.nodes.new("ShaderNodeVolumePrincipled")
+    pv.location = (550, 0)
+    # Our sigma already holds the density grid: no attribute multiplies it again.
+    pv.inputs["Density Attribute"].default_value = ""
+    pv.inputs["Color Attribute"].default_value = ""
+    pv.inputs["Temperature Attribute"].default_value = ""
+    pv.inputs["Absorption Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    pv.inputs["Anisotropy"].default_value = 0.0
+    pv.inputs["Emission Strength"].default_value = 0.0
+    pv.inputs["Blackbody Intensity"].default_value = 0.0
+    nt.links.new(sigma, pv.inputs["Density"])
+    nt.links.new(color.outputs["Color"], pv.inputs["Color"])
+    nt.links.new(pv.outputs[0], out.inputs["Volume"])
+    return mat
+
+
+def volume_material(white=False, relit=False):
+    name = MATERIAL_NAME_RELIT if relit else MATERIAL_NAME_WHITE if white else MATERIAL_NAME
     mat = bpy.data.materials.get(name)
     if mat is None or mat.library is not None:
-        mat = build_material(name, white)
+        mat = build_relit_material(name) if relit else build_material(name, white)
     return mat
 
 

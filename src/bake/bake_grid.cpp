@@ -206,9 +206,8 @@ void slab_color_voxels(const BakeLayout& L, int k, const std::vector<SlabDensity
 }
 
 // Pass 2 on the CPU: the slab's voxels with their colour for each direction (the density MLP's outputs once
-// per voxel, then the colour MLP once per direction), combined by combine_colors.
-// A relightable model's bake would store its albedo here instead (NerfModel::intrinsic(), view-independent:
-// no directions to average), for a renderer that shades the grid; today every model bakes its radiance.
+// per voxel, then the colour MLP once per direction), combined by combine_colors. (BakeColour::albedo takes
+// slab_albedo instead.)
 void slab_color(const NerfModel& model, const BakeLayout& L, int k, const std::vector<SlabDensity>& dens,
                 const std::vector<float>& sh, const ColourDirections& cd, const VisibilityGrid& vis,
                 nerf::FieldBatch& b, SlabVoxels& out) {
@@ -242,6 +241,20 @@ void slab_color(const NerfModel& model, const BakeLayout& L, int k, const std::v
             const uint32_t ij = out.ij[off + t];
             out.color[off + t] = combine_colors(vis, cd, int(ij % nx), int(ij / nx), k, per_dir.data());
         }
+    }
+}
+
+// Pass 2 for BakeColour::albedo: the intrinsic field's albedo at the centres of the same voxels as pass 2,
+// on the CPU whatever evaluated the density (one small hash grid + MLP per voxel, no directions). The albedo
+// is linear; it is stored sRGB-encoded, as BakedGrid::color holds every colour, and the writers decode it.
+void slab_albedo(const nerf::IntrinsicFieldView& intrinsic, const BakeLayout& L, int k,
+                 const std::vector<SlabDensity>& dens, SlabVoxels& out) {
+    std::vector<Vec3> pos;
+    slab_color_voxels(L, k, dens, out, pos);
+    out.color.resize(pos.size());
+    for (size_t t = 0; t < pos.size(); ++t) {
+        const Rgb a = intrinsic.query(pos[t]).albedo;
+        out.color[t] = Rgb(linear_to_srgb(a.x), linear_to_srgb(a.y), linear_to_srgb(a.z));
     }
 }
 
@@ -436,9 +449,22 @@ ColourDirections colour_directions(const NerfModel& model, const BakeSettings& s
     return cd;
 }
 
+void check_colour_settings(const NerfModel& model, const BakeSettings& settings, const std::string& model_name) {
+    if (settings.colour != BakeColour::albedo) return;
+    if (!model.relightable())
+        throw Error(model_name +
+                    ": --colour albedo needs a relightable model (trained with --relightable; nerfpt info "
+                    "says), this one has no relight section");
+    if (settings.direction)
+        throw Error("--direction " + vec_text(*settings.direction) +
+                    ": the albedo is the same from every direction; use it with --colour radiance");
+}
+
 BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const BakeProgress& progress,
                      BakeField* field) {
+    check_colour_settings(model, settings, "model");
     BakedGrid g;
+    g.colour = settings.colour;
     g.layout = make_bake_layout(model, settings);
     const BakeLayout& L = g.layout;
     g.threshold = settings.threshold.value_or(default_threshold(model));
@@ -460,30 +486,41 @@ BakedGrid bake_model(const NerfModel& model, const BakeSettings& settings, const
 
     std::vector<SlabDensity> dens(static_cast<size_t>(nz));
     std::vector<SlabVoxels> slabs(static_cast<size_t>(nz));
+    // On the CPU, slabs are independent and each writes only its own output, so the result is the same for any
+    // thread count and scheduling.
     if (field) {
         density_with(*field, model, L, g.threshold, dens, report);
+    } else {
+        tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& r) {
+            nerf::FieldBatch b;
+            std::vector<Vec3> pos;
+            std::vector<uint32_t> cand;
+            for (int k = r.begin(); k != r.end(); ++k) {
+                slab_density(model, L, k, g.threshold, b, pos, cand, dens[size_t(k)]);
+                report();
+            }
+        });
+    }
+    if (settings.colour == BakeColour::albedo) {
+        const nerf::IntrinsicFieldView intrinsic = model.intrinsic();
+        tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& r) {
+            for (int k = r.begin(); k != r.end(); ++k) {
+                slab_albedo(intrinsic, L, k, dens, slabs[size_t(k)]);
+                report();
+            }
+        });
+    } else if (field) {
         const VisibilityGrid vis = make_visibility_grid(L, dens);
         color_with(*field, L, dens, cd, vis, slabs, report);
     } else {
-    // Slabs are independent and each writes only its own output, so the result is the same for any thread
-    // count and scheduling.
-    tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& r) {
-        nerf::FieldBatch b;
-        std::vector<Vec3> pos;
-        std::vector<uint32_t> cand;
-        for (int k = r.begin(); k != r.end(); ++k) {
-            slab_density(model, L, k, g.threshold, b, pos, cand, dens[size_t(k)]);
-            report();
-        }
-    });
-    const VisibilityGrid vis = make_visibility_grid(L, dens);
-    tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& r) {
-        nerf::FieldBatch b;
-        for (int k = r.begin(); k != r.end(); ++k) {
-            slab_color(model, L, k, dens, sh, cd, vis, b, slabs[size_t(k)]);
-            report();
-        }
-    });
+        const VisibilityGrid vis = make_visibility_grid(L, dens);
+        tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& r) {
+            nerf::FieldBatch b;
+            for (int k = r.begin(); k != r.end(); ++k) {
+                slab_color(model, L, k, dens, sh, cd, vis, b, slabs[size_t(k)]);
+                report();
+            }
+        });
     }
 
     size_t n = 0;

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/vec.h"
@@ -23,12 +24,20 @@ constexpr uint64_t k_max_bake_voxels = uint64_t(1) << 31;
 // Largest --res: more would need more voxels than k_max_bake_voxels even for a flat crop.
 constexpr int k_max_bake_resolution = 65536;
 
+// What a bake's colour grid holds. Radiance: the NeRF's trained colour (the light of the capture), for
+// emission-absorption renderers. Albedo: a relightable model's diffuse albedo (NerfModel::intrinsic()), for a
+// renderer that scatters light with the grid (Blender's Principled Volume); view-independent, so no direction
+// is averaged. An albedo grid rendered as emission glows with its albedo: radiance is the default for every
+// model, albedo is asked for.
+enum class BakeColour { radiance, albedo };
+
 struct BakeSettings {
     std::optional<nerf::CropBox> crop;  // model space; default: the model's aabb, 0.5 -+ aabb_scale / 2
     int resolution = 256;               // voxels along the crop's longest side (when voxel_size is 0)
     float voxel_size = 0.0f;            // model units; > 0 overrides resolution
     std::optional<Vec3> direction;      // training-world axes; none: the average over colour_directions()
     std::optional<float> threshold;     // σ per model unit; none: default_threshold(model)
+    BakeColour colour = BakeColour::radiance;
 };
 
 // Voxel counts and the voxel <-> model map. Index (i, j, k) runs along the cube's LOCAL x, y, z, i.e. model
@@ -85,7 +94,9 @@ struct BakedGrid {
     // The NeRF's colour as its sRGB-encoded sigmoid outputs store it: for `avg`, the average in LINEAR light
     // over colour_directions(), each direction also weighted by the voxel's visibility from it (see
     // bake_grid.cpp), encoded back to sRGB.
+    // With BakeColour::albedo: the intrinsic albedo (linear) at the voxel's centre, sRGB-encoded likewise.
     std::vector<Rgb> color;
+    BakeColour colour = BakeColour::radiance;
     std::vector<uint8_t> has_density;  // 1: a density voxel; 0: colour only
     uint64_t density_voxels = 0;       // how many have has_density
 
@@ -105,6 +116,11 @@ class BakeField {
     virtual void colors(const std::vector<Vec3>& positions, const std::vector<Vec3>& dirs,
                         std::vector<Rgb>& color) = 0;
 };
+
+// Checks that the model can be baked with these settings: albedo needs a relightable model and no direction.
+// Throws npt::Error naming the option (--colour, --direction); `model_name` names the model in the message.
+void check_colour_settings(const nerf::NerfModel& model, const BakeSettings& settings,
+                           const std::string& model_name);
 
 // Bakes the model: on the CPU (field == nullptr) in parallel over z-slabs (TBB), or with `field` over batches
 // of slabs; the result does not depend on the thread count.

@@ -51,6 +51,10 @@ VdbGrids make_grids(const BakedGrid& grid) {
         cacc.setValue(c, openvdb::Vec3s(srgb_to_linear(s.x), srgb_to_linear(s.y), srgb_to_linear(s.z)));
     }
     g.density->insertMeta("nerfpt_sigma_scale", openvdb::FloatMetadata(L.model_per_local));
+    // What the colour grid holds (bake_grid.h, BakeColour): Blender's import shades an albedo grid as a
+    // scattering volume and a radiance grid as emission.
+    g.color->insertMeta("nerfpt_colour",
+                        openvdb::StringMetadata(grid.colour == BakeColour::albedo ? "albedo" : "radiance"));
     return g;
 }
 

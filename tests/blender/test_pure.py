@@ -187,6 +187,23 @@ class ModelFile(unittest.TestCase):
             write_model(p, 4.0, 0.25, (0.5, 0.5, 0.5))
             self.assertAlmostEqual(model_file.placement(p)["half_size"][2], 2.0 / 0.25, places=5)
 
+    def test_relightable(self):
+        with tempfile.TemporaryDirectory() as d:
+            p = os.path.join(d, "m.npt")
+            write_model(p, 1.0, 0.33, (0.5, 0.5, 0.5), [(b"CONF", b"{}")])
+            self.assertEqual(model_file.section_tags(p), ["CONF", "SCEN"])
+            self.assertFalse(model_file.is_relightable(p))
+            write_model(p, 1.0, 0.33, (0.5, 0.5, 0.5), [(b"CONF", b"{}"), (b"RLIT", b"x" * 100)])
+            self.assertTrue(model_file.is_relightable(p))
+            with open(p, "rb") as f:
+                data = f.read()
+            write(p, data[:40])  # inside RLIT's payload
+            with self.assertRaisesRegex(model_file.ModelFileError, "truncated \\(section 'RLIT'\\)"):
+                model_file.is_relightable(p)
+            write(p, b"hello")
+            with self.assertRaisesRegex(model_file.ModelFileError, "not a nerfpt model"):
+                model_file.is_relightable(p)
+
     def test_bad_files(self):
         with tempfile.TemporaryDirectory() as d:
             p = os.path.join(d, "m.npt")
