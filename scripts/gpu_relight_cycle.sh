@@ -22,17 +22,17 @@ echo "train + relight wall: $(awk "BEGIN {print $(date +%s.%N) - $start}") s" | 
 $bin/nerfpt info $work/dev.npt | tee -a "$out/train.log"
 timeout 300 $bin/relight_fields $work/dev.npt $data/transforms_test.json $work/pred/aov --spp 8 --backend cuda \
     | tee "$out/fields.log"
-python3 .gpu/relight/score.py $data $work/pred --normals-zup --label dev | tee "$out/score.log"
+PYTHONPATH=scripts/exr_shim python3 .gpu/relight/score.py $data $work/pred --normals-zup --label dev | tee "$out/score.log"
 if [[ ${RELIT:-0} == 1 ]]; then
     BIN=$bin MODEL=$work/dev.npt DATA=$data PRED=$work/pred bench/relight_dev.sh render 2>&1 | tee "$out/relit.log"
     # The render's AOVs replaced relight_fields' (world normals of the nerfpt scene, +Y up).
-    python3 .gpu/relight/score.py $data $work/pred --label dev-render | tee -a "$out/score.log"
+    PYTHONPATH=scripts/exr_shim python3 .gpu/relight/score.py $data $work/pred --label dev-render | tee -a "$out/score.log"
 fi
 if [[ ${EMISSIVE:-0} == 1 ]]; then
     # The baseline: the same model rendered as today, emissive (its capture light baked in).
     SHADING=emissive BIN=$bin MODEL=$work/dev.npt DATA=$data PRED=$work/emissive bench/relight_dev.sh render 2>&1 |
         tee "$out/emissive.log"
-    python3 .gpu/relight/score.py $data $work/emissive --label dev-emissive | tee -a "$out/score.log"
+    PYTHONPATH=scripts/exr_shim python3 .gpu/relight/score.py $data $work/emissive --label dev-emissive | tee -a "$out/score.log"
 fi
 if [[ -n ${GTEST_FILTER:-} ]]; then
     timeout "${TEST_SECONDS:-300}" scripts/gpu_check.sh run --gtest_filter="$GTEST_FILTER" >"$out/gpu_tests.log" 2>&1
