@@ -65,8 +65,8 @@ frames_of() {  # capture name -> its frames folder, made when missing
 
 table=$out/table.md
 {
-    echo "| capture | quality | features/frame | matches/pair (verified pairs, inliers/pair) | extraction s wall / CPU (load) | matching | mapping | total wall / CPU | registered | jumps | rotation median / max (deg) | centre median / max (%) |"
-    echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+    echo "| capture | quality | features/frame | matches/pair (verified pairs, inliers/pair) | extraction s wall / CPU (load) | matching | mapping | loops | total wall / CPU | registered | jumps | rotation median / max (deg) | centre median / max (%) |"
+    echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } >"$table"
 for cap in $captures; do
     frames=$(frames_of "$cap")
@@ -94,7 +94,7 @@ import json, re, sys
 cap, q, run = sys.argv[1:4]
 log = open(f"{run}/poses.log").read()
 steps = {m[0]: (float(m[1]), float(m[2]), m[3]) for m in
-         re.findall(r"^\s+(extraction|matching|mapping)\s+([\d.]+) s wall,\s+([\d.]+) s CPU \(load ([\d.]+)", log, re.M)}
+         re.findall(r"^\s+(extraction|matching|mapping|loops)\s+([\d.]+) s wall,\s+([\d.]+) s CPU \(load ([\d.]+)", log, re.M)}
 reg = re.search(r"registered (\d+) of (\d+) frames", log)
 jumps = re.search(r"the camera path jumps (\d+) time", log)
 db = json.load(open(f"{run}/db_stats.json"))
@@ -102,7 +102,7 @@ try:
     pe = json.load(open(f"{run}/pose_error.json"))
 except (OSError, ValueError):
     pe = None
-cell = lambda s: f"{steps[s][0]:.0f} / {steps[s][1]:.0f} ({steps[s][2]})"
+cell = lambda s: f"{steps[s][0]:.0f} / {steps[s][1]:.0f} ({steps[s][2]})" if s in steps else "-"
 wall = sum(v[0] for v in steps.values()); cpu = sum(v[1] for v in steps.values())
 if pe is None:
     rot = centre = "n/a"
@@ -114,7 +114,7 @@ else:
     centre = f"{pe['centre_percent']['median']:.3f} / {pe['centre_percent']['max']:.3f}"
 f, m, v = db["features_per_image"], db["matches_per_pair"], db["inliers_per_verified_pair"]
 print(f"| {cap} | {q} | {f['mean']:.0f} | {m['mean']:.0f} ({v['count']}, {v['mean']:.0f}) | {cell('extraction')} | {cell('matching')} | "
-      f"{cell('mapping')} | {wall:.0f} / {cpu:.0f} | {reg[1]} of {reg[2]} | {jumps[1] if jumps else 0} | {rot} | {centre} |")
+      f"{cell('mapping')} | {cell('loops')} | {wall:.0f} / {cpu:.0f} | {reg[1]} of {reg[2]} | {jumps[1] if jumps else 0} | {rot} | {centre} |")
 EOF
         tail -1 "$table" >&2
     done
