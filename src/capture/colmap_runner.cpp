@@ -9,11 +9,11 @@
 #include <thread>
 #include <vector>
 
+#include "capture/pose_alignment.h"
+#include "capture/revisit_pairs.h"
 #include "core/error.h"
 #include "core/executable.h"
 #include "core/image_io.h"
-#include "capture/pose_alignment.h"
-#include "capture/revisit_pairs.h"
 
 namespace npt::capture {
 namespace fs = std::filesystem;
@@ -98,8 +98,8 @@ void run_step(int index, const Step& step, const fs::path& work, ColmapRun& run)
     run.cpu_seconds[index] += cpu;
     run.seconds[index] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (status != 0)
-        throw Error("COLMAP " + std::string(step.name) + " failed (exit " + std::to_string(status) + "; log " +
-                    log.string() + "): " + last_line_of(log));
+        throw Error("COLMAP " + std::string(step.name) + " failed (exit " + std::to_string(status) +
+                    "; log " + log.string() + "): " + last_line_of(log));
 }
 
 // The reconstruction in `sparse` (one folder per model the mapper could not join) that registered the most
@@ -217,6 +217,7 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
     const fs::path db = work / "database.db";
     fs::remove(db, ec);
     fs::remove_all(work / "sparse", ec);
+    fs::remove_all(work / "sparse_loops", ec);
     fs::create_directories(work / "sparse", ec);
     // COLMAP reads every file of the folder otherwise (curate.json, the contact sheet).
     const fs::path list = work / "frames.txt";
@@ -294,7 +295,8 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
             // The closed model replaces the first unless it lost frames (the new matches broke it apart).
             ColmapModel closed;
             fs::path closed_folder;
-            if (read_largest_model(sparse, closed, closed_folder) && closed.images.size() >= run.model.images.size()) {
+            if (read_largest_model(sparse, closed, closed_folder) &&
+                closed.images.size() >= run.model.images.size()) {
                 run.model = std::move(closed);
                 run.model_folder = closed_folder;
             }

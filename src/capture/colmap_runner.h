@@ -35,7 +35,7 @@ struct ColmapSettings {
     bool quadratic_overlap = false;
     // After a sequential matcher's first model: match the frames whose cameras revisit an earlier view and map
     // again (fast and balanced; best is COLMAP's own pipeline). On the handheld capture the rotation error fell
-    // from 0.89° to 0.24° (docs/benchmarks.md, "Poses as accurate as before the speed-up").
+    // from 0.89° to 0.28° (docs/benchmarks.md, "Poses as accurate as before the speed-up").
     bool close_loops = true;
     PosesQuality quality = PosesQuality::Fast;
     int threads = 0;  // every step's num_threads; 0: all hardware threads (passed explicitly all the same)

@@ -16,15 +16,16 @@
 namespace npt::capture {
 
 struct RevisitSettings {
-    int overlap = 15;              // frames closer than this in name order are matched already (sequential)
-    double max_angle_deg = 25;     // largest angle between the two cameras' viewing directions
-    double max_distance_steps = 6;  // largest distance between the centres, in median steps between neighbours
-    int max_per_frame = 4;         // nearest partners kept per frame (matching costs per pair)
+    int overlap = 15;           // frames closer than this in name order are matched already (sequential)
+    double max_angle_deg = 25;  // largest angle between the two cameras' viewing directions
+    double max_distance_steps =
+        6;                  // largest distance between the centres, in median steps between neighbours
+    int max_per_frame = 4;  // nearest partners kept per frame (matching costs per pair)
 };
 
 // Pairs (earlier name, later name) of the name-sorted poses, each pair once, nearest first per frame. Empty
 // for fewer than overlap + 2 poses.
-std::vector<std::pair<std::string, std::string>> revisit_pairs(const std::vector<CameraPose>& poses_sorted_by_name,
-                                                               const RevisitSettings& settings = {});
+std::vector<std::pair<std::string, std::string>> revisit_pairs(
+    const std::vector<CameraPose>& poses_sorted_by_name, const RevisitSettings& settings = {});
 
 }  // namespace npt::capture

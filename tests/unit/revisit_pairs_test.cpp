@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -14,8 +13,8 @@ namespace {
 
 constexpr double k_pi = 3.14159265358979323846;
 
-// `n` cameras walking `turns` times around the origin on a circle of radius 1 at constant height, each looking
-// at the origin (OpenGL camera-to-world: -Z towards the origin, +Y up), named in walking order.
+// `n` cameras walking `turns` times around the origin on a circle of radius 1 at constant height, each
+// looking at the origin (OpenGL camera-to-world: -Z towards the origin, +Y up), named in walking order.
 std::vector<CameraPose> walk(int n, double turns, double rise_per_turn = 0) {
     std::vector<CameraPose> poses;
     for (int i = 0; i < n; ++i) {
@@ -80,8 +79,8 @@ TEST(RevisitPairs, ASecondTurnPairsWithTheFirstAndRespectsTheCap) {
         for (const auto& [a, b] : pairs) found |= index_of(a) == i && index_of(b) == i + 50;
         EXPECT_TRUE(found) << i;
     }
-    // With one partner per frame, each frame keeps only its nearest: the frame at its place on the other turn,
-    // so exactly the 50 pairs (i, i + 50).
+    // With one partner per frame, each frame keeps only its nearest: the frame at its place on the other
+    // turn, so exactly the 50 pairs (i, i + 50).
     s.max_per_frame = 1;
     const auto nearest = revisit_pairs(walk(100, 2.0), s);
     EXPECT_EQ(nearest.size(), 50u);
