@@ -7,9 +7,12 @@
 #         piece by piece with the reference model shipped beside it (rotation / centre median per piece)
 #   rich  the feature-rich synthetic turntable (tests/tools/make_turntable_capture.cpp --rich: 200 frames of
 #         540x960, of which curate keeps 100), compared with its true poses (median and max)
+#   handheld  the simulated handheld capture (scripts/make_handheld_capture.py: an object on a textured table
+#         with props, one walk around it with hand shake, 100 frames of 540x960 rendered by Blender, encoded
+#         with libx264, all kept by curate), compared with its true poses; needs blender
 # Usage: scripts/bench_poses.sh [OUT_DIR (default build/bench_poses)] [QUALITY ...] (default: fast balanced best)
-#   NERFPT_BENCH_CAPTURES="beer rich" (default both), NERFPT_BENCH_THREADS (default: all cores).
-# The frames are made once and kept in OUT_DIR (the synthetic render takes ~8 CPU-minutes); each run's COLMAP
+#   NERFPT_BENCH_CAPTURES="beer rich handheld" (the default), NERFPT_BENCH_THREADS (default: all cores).
+# The frames are made once and kept in OUT_DIR (the synthetic renders take ~8 CPU-minutes each); each run's COLMAP
 # folder and log stay in OUT_DIR/<capture>_<quality>/. Wall times are the target's measure and mean something
 # only on a quiet machine: the load column says how quiet it was; CPU times compare runs on a busy one.
 # Needs a Release build (nerfpt and nerfpt_make_turntable_capture), COLMAP and ffmpeg on PATH.
@@ -19,7 +22,7 @@ out=${1:-$root/build/bench_poses}
 shift || true
 qualities=("$@")
 [[ ${#qualities[@]} -gt 0 ]] || qualities=(fast balanced best)
-captures=${NERFPT_BENCH_CAPTURES:-beer rich}
+captures=${NERFPT_BENCH_CAPTURES:-beer rich handheld}
 threads=${NERFPT_BENCH_THREADS:-0}
 nerfpt=$root/build/nerfpt
 py=$(command -v /usr/bin/python3 || command -v python3)  # Debian's, with sqlite3
@@ -45,14 +48,25 @@ frames_of() {  # capture name -> its frames folder, made when missing
         [[ -f $out/rich_frames/curate.json ]] ||
             "$nerfpt" -q curate "$out/rich/turntable.mp4" -o "$out/rich_frames" >&2
         echo "$out/rich_frames" ;;
-    *) echo "bench_poses: unknown capture '$1' (beer, rich)" >&2; exit 2 ;;
+    handheld)
+        if [[ ! -f $out/handheld/handheld.mp4 ]]; then
+            echo "bench_poses: rendering the handheld capture (100 frames of 540x960, Blender) ..." >&2
+            blender -b --factory-startup --python "$root/scripts/make_handheld_capture.py" -- "$out/handheld" \
+                --frames 100 >"$out/handheld_render.log" 2>&1
+            ffmpeg -loglevel error -y -framerate 30 -i "$out/handheld/render/frame_%05d.png" -c:v libx264 -crf 18 \
+                -pix_fmt yuv420p "$out/handheld/handheld.mp4" >&2
+        fi
+        [[ -f $out/handheld_frames/curate.json ]] ||
+            "$nerfpt" -q curate "$out/handheld/handheld.mp4" -o "$out/handheld_frames" --target-frames 100 >&2
+        echo "$out/handheld_frames" ;;
+    *) echo "bench_poses: unknown capture '$1' (beer, rich, handheld)" >&2; exit 2 ;;
     esac
 }
 
 table=$out/table.md
 {
-    echo "| capture | quality | features/frame | matches/pair (verified pairs, inliers/pair) | extraction s wall / CPU (load) | matching | mapping | total wall / CPU | registered | jumps | rotation median / max (deg) | centre median / max (%) |"
-    echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+    echo "| capture | quality | features/frame | matches/pair (verified pairs, inliers/pair) | extraction s wall / CPU (load) | matching | mapping | loops | total wall / CPU | registered | jumps | rotation median / max (deg) | centre median / max (%) |"
+    echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 } >"$table"
 for cap in $captures; do
     frames=$(frames_of "$cap")
@@ -71,7 +85,7 @@ for cap in $captures; do
             "$nerfpt" pose-error "$run/transforms.json" "$beer_reference" --match rate --known-rate 10 0 --pieces \
                 --json "$run/pose_error.json" >"$run/pose_error.txt" 2>&1 || true
         else
-            "$nerfpt" pose-error "$run/transforms.json" "$out/rich/truth.json" --json "$run/pose_error.json" \
+            "$nerfpt" pose-error "$run/transforms.json" "$out/$cap/truth.json" --json "$run/pose_error.json" \
                 >"$run/pose_error.txt" 2>&1 || true
         fi
         "$py" "$root/scripts/colmap_db_stats.py" "$run/colmap/database.db" --json >"$run/db_stats.json"
@@ -80,7 +94,7 @@ import json, re, sys
 cap, q, run = sys.argv[1:4]
 log = open(f"{run}/poses.log").read()
 steps = {m[0]: (float(m[1]), float(m[2]), m[3]) for m in
-         re.findall(r"^\s+(extraction|matching|mapping)\s+([\d.]+) s wall,\s+([\d.]+) s CPU \(load ([\d.]+)", log, re.M)}
+         re.findall(r"^\s+(extraction|matching|mapping|loops)\s+([\d.]+) s wall,\s+([\d.]+) s CPU \(load ([\d.]+)", log, re.M)}
 reg = re.search(r"registered (\d+) of (\d+) frames", log)
 jumps = re.search(r"the camera path jumps (\d+) time", log)
 db = json.load(open(f"{run}/db_stats.json"))
@@ -88,7 +102,7 @@ try:
     pe = json.load(open(f"{run}/pose_error.json"))
 except (OSError, ValueError):
     pe = None
-cell = lambda s: f"{steps[s][0]:.0f} / {steps[s][1]:.0f} ({steps[s][2]})"
+cell = lambda s: f"{steps[s][0]:.0f} / {steps[s][1]:.0f} ({steps[s][2]})" if s in steps else "-"
 wall = sum(v[0] for v in steps.values()); cpu = sum(v[1] for v in steps.values())
 if pe is None:
     rot = centre = "n/a"
@@ -100,7 +114,7 @@ else:
     centre = f"{pe['centre_percent']['median']:.3f} / {pe['centre_percent']['max']:.3f}"
 f, m, v = db["features_per_image"], db["matches_per_pair"], db["inliers_per_verified_pair"]
 print(f"| {cap} | {q} | {f['mean']:.0f} | {m['mean']:.0f} ({v['count']}, {v['mean']:.0f}) | {cell('extraction')} | {cell('matching')} | "
-      f"{cell('mapping')} | {wall:.0f} / {cpu:.0f} | {reg[1]} of {reg[2]} | {jumps[1] if jumps else 0} | {rot} | {centre} |")
+      f"{cell('mapping')} | {cell('loops')} | {wall:.0f} / {cpu:.0f} | {reg[1]} of {reg[2]} | {jumps[1] if jumps else 0} | {rot} | {centre} |")
 EOF
         tail -1 "$table" >&2
     done

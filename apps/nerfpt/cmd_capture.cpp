@@ -248,9 +248,12 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                 {"extraction_seconds", s.seconds[0]},
                                 {"matching_seconds", s.seconds[1]},
                                 {"mapping_seconds", s.seconds[2]},
+                                {"loop_closure_seconds", s.seconds[3]},
                                 {"extraction_cpu_seconds", s.cpu_seconds[0]},
                                 {"matching_cpu_seconds", s.cpu_seconds[1]},
                                 {"mapping_cpu_seconds", s.cpu_seconds[2]},
+                                {"loop_closure_cpu_seconds", s.cpu_seconds[3]},
+                                {"loop_pairs", s.loop_pairs},
                                 {"seconds", clock.seconds()}});
     }
 

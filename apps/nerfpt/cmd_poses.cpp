@@ -28,7 +28,9 @@ CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
         "Runs the colmap command-line tool (Debian: apt-get install colmap; CPU only) in a work folder:\n"
         "feature_extractor (one OPENCV camera shared by all frames), the sequential matcher (frames of a video,\n"
         "in name order, each with its next 15) or the exhaustive one, and the mapper; keeps the reconstruction\n"
-        "with the most frames, warns when the camera path leaps between neighbouring frames, and\n"
+        "with the most frames (fast and balanced then close its loops: frames whose cameras revisit an\n"
+        "earlier view, 16 or more frames before, are matched with it and the mapper runs again), warns when\n"
+        "the camera path leaps between neighbouring frames, and\n"
         "writes transforms.json as instant-ngp's colmap2nerf does: OpenGL cameras, the average camera up turned\n"
         "to +Z, the point the cameras look at moved to the origin, the mean camera distance scaled to 4,\n"
         "aabb_scale 16 (docs/formats.md). Fails without writing when fewer than --min-registered of the frames\n"
@@ -94,10 +96,14 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
                registered, run.frames, run.model_folder.string(), run.model.points.size(), rep.mean_px,
                args.quality, run.max_num_features);
     // CPU time beside wall time: on a shared machine only the first is comparable between runs.
-    static const char* const k_steps[3] = {"extraction", "matching", "mapping"};
-    for (int i = 0; i < 3; ++i)
-        fmt::print("  {:<10} {:6.1f} s wall, {:6.1f} s CPU (load {:.2f} at start)\n", k_steps[i], run.seconds[i],
-                   run.cpu_seconds[i], run.load_at_start[i]);
+    static const char* const k_steps[capture::k_colmap_steps] = {"extraction", "matching", "mapping",
+                                                                 "loops"};
+    for (int i = 0; i < capture::k_colmap_steps; ++i) {
+        if (i == 3 && run.loop_pairs == 0) continue;  // no loop closure: nothing revisited, or not asked for
+        fmt::print("  {:<10} {:6.1f} s wall, {:6.1f} s CPU (load {:.2f} at start){}\n", k_steps[i],
+                   run.seconds[i], run.cpu_seconds[i], run.load_at_start[i],
+                   i == 3 ? fmt::format(": {} revisiting pairs matched, mapped again", run.loop_pairs) : "");
+    }
     if (double(registered) < args.min_registered * double(run.frames) || registered < 3)
         throw Error(fmt::format(
             "COLMAP registered only {} of {} frames (--min-registered {}): try --matcher exhaustive, curate "
@@ -131,7 +137,8 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
     summary.points = run.model.points.size();
     summary.reprojection_px = rep.mean_px;
     summary.path_jumps = jumps.size();
-    for (int i = 0; i < 3; ++i) {
+    summary.loop_pairs = run.loop_pairs;
+    for (int i = 0; i < capture::k_colmap_steps; ++i) {
         summary.seconds[i] = run.seconds[i];
         summary.cpu_seconds[i] = run.cpu_seconds[i];
     }

@@ -32,8 +32,9 @@ struct PosesSummary {
     size_t frames = 0, registered = 0, points = 0;
     double reprojection_px = 0;
     size_t path_jumps = 0;  // capture/path_continuity.h
-    double seconds[3] = {0, 0, 0};      // extraction, matching, mapping (wall)
-    double cpu_seconds[3] = {0, 0, 0};  // the same steps' CPU time (user + system)
+    double seconds[4] = {0, 0, 0, 0};      // extraction, matching, mapping, loop closure (wall)
+    double cpu_seconds[4] = {0, 0, 0, 0};  // the same steps' CPU time (user + system)
+    size_t loop_pairs = 0;                 // revisiting pairs the loop closure matched
     int max_num_features = 0;       // SIFT budget per frame
 };
 // The stage itself (COLMAP, checks, transforms.json), printing as `nerfpt poses` does.

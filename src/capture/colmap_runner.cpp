@@ -9,6 +9,8 @@
 #include <thread>
 #include <vector>
 
+#include "capture/pose_alignment.h"
+#include "capture/revisit_pairs.h"
 #include "core/error.h"
 #include "core/executable.h"
 #include "core/image_io.h"
@@ -76,6 +78,45 @@ QualityPreset preset(PosesQuality q) {
             break;
     }
     return {true, true, 0, 8192, 8192, 1.1, 50, 5, 25};
+}
+
+struct Step {
+    const char* name;
+    const char* log;
+    std::vector<std::string> argv;
+};
+
+// Runs COLMAP step `index` (ColmapRun's arrays; a step of several commands adds up), timing it; throws naming
+// the step and its log when it fails.
+void run_step(int index, const Step& step, const fs::path& work, ColmapRun& run) {
+    double load = 0;
+    if (run.load_at_start[index] == 0 && getloadavg(&load, 1) == 1) run.load_at_start[index] = load;
+    const auto t0 = std::chrono::steady_clock::now();
+    const fs::path log = work / step.log;
+    double cpu = 0;
+    const int status = run_logged(step.argv, log, &cpu);
+    run.cpu_seconds[index] += cpu;
+    run.seconds[index] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (status != 0)
+        throw Error("COLMAP " + std::string(step.name) + " failed (exit " + std::to_string(status) +
+                    "; log " + log.string() + "): " + last_line_of(log));
+}
+
+// The reconstruction in `sparse` (one folder per model the mapper could not join) that registered the most
+// frames; false when there is none.
+bool read_largest_model(const fs::path& sparse, ColmapModel& model, fs::path& folder) {
+    size_t best = 0;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(sparse, ec)) {
+        if (!e.is_directory() || !fs::exists(e.path() / "images.bin")) continue;
+        ColmapModel m = read_colmap_model(e.path());
+        if (m.images.size() > best) {
+            best = m.images.size();
+            model = std::move(m);
+            folder = e.path();
+        }
+    }
+    return best > 0;
 }
 
 std::string arg(double v) {
@@ -176,6 +217,7 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
     const fs::path db = work / "database.db";
     fs::remove(db, ec);
     fs::remove_all(work / "sparse", ec);
+    fs::remove_all(work / "sparse_loops", ec);
     fs::create_directories(work / "sparse", ec);
     // COLMAP reads every file of the folder otherwise (curate.json, the contact sheet).
     const fs::path list = work / "frames.txt";
@@ -190,11 +232,6 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
     run.max_num_features = options.max_num_features;
 
     const std::string gpu = "0";  // Debian's COLMAP is built without CUDA
-    struct Step {
-        const char* name;
-        const char* log;
-        std::vector<std::string> argv;
-    };
     std::vector<std::string> matching = {s.colmap, s.matcher + "_matcher", "--database_path", db.string(),
                                          "--SiftMatching.use_gpu", gpu};
     matching.insert(matching.end(), options.matching.begin(), options.matching.end());
@@ -209,43 +246,62 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
                                            "--ImageReader.single_camera", "1", "--ImageReader.camera_model",
                                            s.camera_model, "--SiftExtraction.use_gpu", gpu};
     extraction.insert(extraction.end(), options.extraction.begin(), options.extraction.end());
-    std::vector<std::string> mapping = {s.colmap, "mapper", "--database_path", db.string(), "--image_path",
-                                        frames.string(), "--output_path", (work / "sparse").string(),
-                                        "--image_list_path", list.string()};
-    mapping.insert(mapping.end(), options.mapping.begin(), options.mapping.end());
+    const auto mapping_into = [&](const fs::path& sparse) {
+        std::vector<std::string> argv = {s.colmap, "mapper", "--database_path", db.string(), "--image_path",
+                                         frames.string(), "--output_path", sparse.string(), "--image_list_path",
+                                         list.string()};
+        argv.insert(argv.end(), options.mapping.begin(), options.mapping.end());
+        return argv;
+    };
     const std::vector<Step> steps = {
         {"feature extraction", "feature_extractor.log", extraction},
         {"matching", "matcher.log", matching},
-        {"mapping", "mapper.log", mapping},
+        {"mapping", "mapper.log", mapping_into(work / "sparse")},
     };
     for (size_t i = 0; i < steps.size(); ++i) {
         if (on_step) on_step(steps[i].name);
-        double load = 0;
-        if (getloadavg(&load, 1) == 1) run.load_at_start[i] = load;
-        const auto t0 = std::chrono::steady_clock::now();
-        const fs::path log = work / steps[i].log;
-        const int status = run_logged(steps[i].argv, log, &run.cpu_seconds[i]);
-        run.seconds[i] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        if (status != 0)
-            throw Error("COLMAP " + std::string(steps[i].name) + " failed (exit " + std::to_string(status) +
-                        "; log " + log.string() + "): " + last_line_of(log));
+        run_step(int(i), steps[i], work, run);
     }
     // The mapper writes one folder per reconstruction it could not join; the largest is the scene.
-    size_t best = 0;
-    for (const auto& e : fs::directory_iterator(work / "sparse", ec)) {
-        if (!e.is_directory() || !fs::exists(e.path() / "images.bin")) continue;
-        ColmapModel m = read_colmap_model(e.path());
-        if (m.images.size() > best) {
-            best = m.images.size();
-            run.model = std::move(m);
-            run.model_folder = e.path();
-        }
-    }
-    if (best == 0)
+    if (!read_largest_model(work / "sparse", run.model, run.model_folder))
         throw Error("COLMAP registered no frames of " + std::to_string(run.frames) + " (log " +
                     (work / "mapper.log").string() +
                     "): the frames may be too blurry, too few or too far apart; try --matcher exhaustive or "
                     "curate more frames");
+    if (s.close_loops && s.matcher == "sequential" && s.quality != PosesQuality::Best) {
+        std::vector<CameraPose> poses = colmap_poses(run.model);
+        std::sort(poses.begin(), poses.end(),
+                  [](const CameraPose& a, const CameraPose& b) { return a.name < b.name; });
+        RevisitSettings rs;
+        rs.overlap = s.sequential_overlap;
+        const auto pairs = revisit_pairs(poses, rs);
+        if (!pairs.empty()) {
+            if (on_step) on_step("loop closure");
+            const fs::path pair_list = work / "loop_pairs.txt", sparse = work / "sparse_loops";
+            {
+                std::ofstream f(pair_list);
+                for (const auto& [a, b] : pairs) f << a << " " << b << "\n";
+                if (!f) throw Error(pair_list.string() + ": cannot write the loop pairs");
+            }
+            fs::remove_all(sparse, ec);
+            fs::create_directories(sparse, ec);
+            std::vector<std::string> import = {s.colmap, "matches_importer", "--database_path", db.string(),
+                                               "--match_list_path", pair_list.string(), "--match_type", "pairs",
+                                               "--SiftMatching.use_gpu", gpu};
+            import.insert(import.end(), options.matching.begin(), options.matching.end());
+            run_step(3, {"loop matching", "loop_matcher.log", import}, work, run);
+            run_step(3, {"loop mapping", "loop_mapper.log", mapping_into(sparse)}, work, run);
+            run.loop_pairs = pairs.size();
+            // The closed model replaces the first unless it lost frames (the new matches broke it apart).
+            ColmapModel closed;
+            fs::path closed_folder;
+            if (read_largest_model(sparse, closed, closed_folder) &&
+                closed.images.size() >= run.model.images.size()) {
+                run.model = std::move(closed);
+                run.model_folder = closed_folder;
+            }
+        }
+    }
     return run;
 }
 
