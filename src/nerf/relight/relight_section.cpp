@@ -108,8 +108,12 @@ RelightFields decode_relight_section(const uint8_t* data, size_t size, const std
     if (!h.contains("environment") || !h["environment"].is_array() || h["environment"].size() != 2)
         throw Error(where + ": field 'environment' must be [width, height]");
     const json env_size = {{"width", h["environment"][0]}, {"height", h["environment"][1]}};
-    f.capture_env.width = get_int(env_size, "width", 2, 4096, where + " 'environment'");
-    f.capture_env.height = get_int(env_size, "height", 1, 2048, where + " 'environment'");
+    // 0 x 0: no capture light was estimated (a model made without the relight stage's fit).
+    f.capture_env.width = get_int(env_size, "width", 0, 4096, where + " 'environment'");
+    f.capture_env.height = get_int(env_size, "height", 0, 2048, where + " 'environment'");
+    if ((f.capture_env.width == 0) != (f.capture_env.height == 0) || f.capture_env.width == 1)
+        throw Error(where + ": field 'environment' is " + std::to_string(f.capture_env.width) + "x" +
+                    std::to_string(f.capture_env.height) + " (0x0, or at least 2x1 texels)");
     const int64_t exposures = get_int(h, "exposures", 0, 1 << 24, where);
     f.steps = uint64_t(get_number(h, "steps", 0, 1e15, where));
     f.seconds = get_number(h, "seconds", 0, 1e12, where);
