@@ -3,6 +3,10 @@
 // over `spp` events (what a relit render's first-event AOVs converge to), as `albedo_N.exr` / `normal_N.exr` for
 // ../shared/data/relight/score.py (run it with --normals-zup). Prints a table of time and coverage.
 //   relight_fields MODEL.npt DATA/transforms_test.json OUT_DIR [--spp 8] [--backend cpu|cuda]
+//                  [--normals predicted|density|depth] [--normal-step 0.004] [--normal-pixels 2]
+// --normals measures an estimator of surface_normals.h instead of the fitted normal field (the model then need
+// not be relightable; the albedo is written only for relightable models): what the relight stage's targets are
+// worth against the ground truth.
 #include <fmt/format.h>
 
 #include <cmath>
@@ -17,6 +21,7 @@
 #include "nerf/backend/nerf_backend.h"
 #include "nerf/dataset.h"
 #include "nerf/model_file.h"
+#include "nerf/relight/surface_normals.h"
 #include "nerf/relight/wavefront_march.h"
 
 using namespace npt;
@@ -24,23 +29,32 @@ using namespace npt::nerf;
 
 int main(int argc, char** argv) try {
     if (argc < 4) {
-        fmt::print(stderr, "usage: relight_fields MODEL.npt TRANSFORMS.json OUT_DIR [--spp N] [--backend cpu|cuda]\n");
+        fmt::print(stderr, "usage: relight_fields MODEL.npt TRANSFORMS.json OUT_DIR [--spp N] [--backend cpu|cuda] "
+                           "[--normals predicted|density|depth] [--normal-step S] [--normal-pixels P]\n");
         return 2;
     }
     int spp = 8;
-    std::string backend_name;
+    std::string backend_name, normals_mode = "predicted";
+    float normal_step = 0.004f, normal_pixels = 2.0f;
     for (int i = 4; i + 1 < argc; i += 2) {
         if (std::strcmp(argv[i], "--spp") == 0) spp = std::max(1, std::atoi(argv[i + 1]));
         if (std::strcmp(argv[i], "--backend") == 0) backend_name = argv[i + 1];
+        if (std::strcmp(argv[i], "--normals") == 0) normals_mode = argv[i + 1];
+        if (std::strcmp(argv[i], "--normal-step") == 0) normal_step = float(std::atof(argv[i + 1]));
+        if (std::strcmp(argv[i], "--normal-pixels") == 0) normal_pixels = float(std::atof(argv[i + 1]));
     }
+    if (normals_mode != "predicted" && normals_mode != "density" && normals_mode != "depth")
+        throw Error("--normals: '" + normals_mode + "' is not predicted, density or depth");
     const NerfModel model = load_model(argv[1]);
-    if (!model.relightable()) throw Error(std::string(argv[1]) + ": the model is not relightable");
+    const bool fitted = model.relightable();
+    if (!fitted && normals_mode == "predicted")
+        throw Error(std::string(argv[1]) + ": the model is not relightable (measure --normals density or depth)");
     const Dataset data = load_dataset(argv[2], "");
     const std::filesystem::path out = argv[3];
     std::filesystem::create_directories(out);
     const Backend backend = choose_backend(backend_name).backend;
     auto query = make_field_query(backend, model);
-    const IntrinsicFieldView intrinsic = model.intrinsic();
+    const IntrinsicFieldView intrinsic = fitted ? model.intrinsic() : IntrinsicFieldView{};
     const Mat4 m2w = model.world_to_model.inverse();
     const double t0 = Progress::steady_seconds();
     double coverage = 0;
@@ -60,6 +74,26 @@ int main(int argc, char** argv) try {
                     r.tau_target = -std::log1p(-std::min(rng.next_float(), 0.999999f));
                 }
         march_wavefront(model, *query, rays, WaveMode::event);
+        // The estimator's normal per ray (model space), when not the fitted field's.
+        std::vector<Vec3> estimate;
+        if (normals_mode == "density") {
+            std::vector<Vec3> at(rays.size()), toward(rays.size());
+            for (size_t i = 0; i < rays.size(); ++i) {
+                at[i] = rays[i].event_position;
+                toward[i] = -rays[i].ray.d;
+            }
+            estimate = density_normals(*query, at, toward, normal_step);
+        } else if (normals_mode == "depth") {
+            std::vector<PixelRef> pixels(rays.size());
+            for (int y = 0; y < H; ++y)
+                for (int x = 0; x < W; ++x)
+                    for (int s = 0; s < spp; ++s) {
+                        Pcg32 rng = Pcg32::for_pixel(v, uint32_t(x), uint32_t(y), uint32_t(s));
+                        const float fx = rng.next_float(), fy = rng.next_float();
+                        pixels[(size_t(y) * W + x) * spp + s] = PixelRef{uint32_t(v), x + fx, y + fy, rng.next_float()};
+                    }
+            estimate = depth_stencil_normals(model, *query, data.cameras, pixels, normal_pixels);
+        }
         Image albedo(W, H, 3), normal(W, H, 3);
         for (int y = 0; y < H; ++y)
             for (int x = 0; x < W; ++x) {
@@ -67,11 +101,20 @@ int main(int argc, char** argv) try {
                 Vec3 n(0.0f);
                 int hits = 0;
                 for (int s = 0; s < spp; ++s) {
-                    const WaveRay& r = rays[(size_t(y) * W + x) * spp + s];
+                    const size_t i = (size_t(y) * W + x) * spp + s;
+                    const WaveRay& r = rays[i];
                     if (!r.has_event) continue;
-                    const IntrinsicSample is = intrinsic.query(r.event_position);
-                    a += is.albedo;
-                    Vec3 nw = normalize(m2w.transform_vector(is.normal));
+                    Vec3 nm;
+                    if (fitted) {
+                        const IntrinsicSample is = intrinsic.query(r.event_position);
+                        a += is.albedo;
+                        nm = is.normal;
+                    }
+                    if (!estimate.empty()) {
+                        nm = estimate[i];
+                        if (!(dot(nm, nm) > 0.0f)) continue;  // the estimator has none here
+                    }
+                    Vec3 nw = normalize(m2w.transform_vector(nm));
                     if (dot(nw, m2w.transform_vector(r.ray.d)) > 0.0f) nw = -nw;  // toward the camera
                     n += nw;
                     ++hits;
@@ -82,12 +125,14 @@ int main(int argc, char** argv) try {
                 std::memcpy(albedo.at(x, y), &a, 12);
                 std::memcpy(normal.at(x, y), &n, 12);
             }
-        write_exr(out / fmt::format("albedo_{}.exr", v), albedo);
+        write_exr(out / fmt::format("albedo_{}.exr", v), albedo);  // zero when not fitted (score.py wants one)
         write_exr(out / fmt::format("normal_{}.exr", v), normal);
     }
     const double secs = Progress::steady_seconds() - t0;
-    fmt::print("| views | size | spp | backend | seconds | mean coverage |\n|---|---|---|---|---|---|\n");
-    fmt::print("| {} | {}x{} | {} | {} | {:.1f} | {:.3f} |\n", data.cameras.size(), data.width, data.height, spp,
+    fmt::print("| views | size | spp | normals | backend | seconds | mean coverage |\n|---|---|---|---|---|---|---|\n");
+    fmt::print("| {} | {}x{} | {} | {} | {} | {:.1f} | {:.3f} |\n", data.cameras.size(), data.width, data.height, spp,
+               normals_mode == "density" ? fmt::format("density, step {}", normal_step)
+               : normals_mode == "depth" ? fmt::format("depth, {} px", normal_pixels) : normals_mode,
                backend_name.empty() ? "auto" : backend_name, secs,
                coverage / (double(data.cameras.size()) * data.width * data.height));
     return 0;

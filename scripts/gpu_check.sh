@@ -6,6 +6,9 @@
 #                                   .gpu/bundle.tar.xz, plus the lego views the benchmarks use (100 training
 #                                   views, every 4th test view), the Cornell reference scenes and the NeRF
 #                                   demo scenes into .gpu/
+#   scripts/gpu_check.sh bundle BIN...  here: only the named binaries (nerfpt, relight_fields, render_bench,
+#                                   nerfpt_gpu_tests, ...), stripped, with their libraries, into .gpu/bundle.tar.xz
+#                                   (a smaller carry when .gpu/relight must travel too); builds nothing
 #   scripts/gpu_check.sh run        there (carry .gpu): unpack and run every GPU-labelled test
 #   scripts/gpu_check.sh bench ...  there, after run: bench/train_bench with the given arguments
 # The unpacked binaries are in /tmp/nerfpt-gpu/bin; NERFPT_CLI points the tests at the CLI there.
@@ -15,7 +18,7 @@ mode=${1:-}
 unpacked=/tmp/nerfpt-gpu
 
 unpack() {
-    if [[ ! -x $unpacked/bin/nerfpt_gpu_tests ]]; then
+    if [[ ! -x $unpacked/bin/nerfpt ]]; then
         mkdir -p $unpacked
         tar -xJf .gpu/bundle.tar.xz -C $unpacked
     fi
@@ -24,7 +27,25 @@ unpack() {
     export NERFPT_SHARED_DATA="$PWD/.gpu"  # the benchmarks find nerf_synthetic/lego there
 }
 
+stage_libs() {  # every library ldd resolves outside the C runtime (the GPU machine runs another distribution)
+    for b in .gpu/stage/bin/*; do ldd "$b"; done | awk '/=> \// {print $3}' | sort -u |
+        grep -v -E '/(libc|libm|libdl|libpthread|librt|libgcc_s|libstdc\+\+|ld-linux[^/]*|libcuda)\.so' |
+        xargs -r -I{} cp -L {} .gpu/stage/lib/
+}
 case "$mode" in
+bundle)
+    build=${BUILD_DIR:-build}
+    rm -rf .gpu/stage && mkdir -p .gpu/stage/bin .gpu/stage/lib
+    for name in "${@:2}"; do
+        file=$(find "$build" -maxdepth 3 -type f -name "$name" -perm -u+x | head -1)
+        [[ -n $file ]] || { echo "gpu_check: no binary '$name' under $build (build it first)" >&2; exit 1; }
+        strip -o ".gpu/stage/bin/$name" "$file"
+    done
+    stage_libs
+    tar -cJf .gpu/bundle.tar.xz -C .gpu/stage bin lib
+    rm -rf .gpu/stage
+    du -h .gpu/bundle.tar.xz
+    ;;
 pack)
     build=${BUILD_DIR:-build}
     cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DNERFPT_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 \
@@ -33,10 +54,7 @@ pack)
     rm -rf .gpu/stage && mkdir -p .gpu/stage/bin .gpu/stage/lib
     cp "$build/tests/nerfpt_gpu_tests" "$build/nerfpt" "$build/bench/train_bench" "$build/bench/view_bench" \
         "$build/bench/render_bench" "$build/bench/relight_fields" .gpu/stage/bin/
-    # Everything ldd resolves outside the C runtime travels along (the GPU machine runs another distribution).
-    for b in .gpu/stage/bin/*; do ldd "$b"; done | awk '/=> \// {print $3}' | sort -u |
-        grep -v -E '/(libc|libm|libdl|libpthread|librt|libgcc_s|libstdc\+\+|ld-linux[^/]*|libcuda)\.so' |
-        xargs -r -I{} cp -L {} .gpu/stage/lib/
+    stage_libs
     tar -cJf .gpu/bundle.tar.xz -C .gpu/stage bin lib
     rm -rf .gpu/stage
     # The lego views the benchmarks read: the training set and test views 0, 4, 8, ... (train_bench
@@ -90,7 +108,7 @@ bench)
     $unpacked/bin/train_bench "${@:2}"
     ;;
 *)
-    echo "usage: scripts/gpu_check.sh pack|run [gtest options]|bench [train_bench options]" >&2
+    echo "usage: scripts/gpu_check.sh pack|bundle BIN...|run [gtest options]|bench [train_bench options]" >&2
     exit 2
     ;;
 esac

@@ -5,6 +5,10 @@
 # fields on the 20 test views (bench/relight_fields) and the relight scorer on them; with RELIT=1 also the 20
 # views relit under `sunset` and `studio` and the room scene (bench/relight_dev.sh); then the GPU tests named by
 # GTEST_FILTER, if any. Logs and small pictures in $OUT.
+# ESTIMATORS=1 also scores the surface-normal estimators the stage can fit to (relight_fields --normals density |
+# depth, at a few steps / stencil widths) on the trained NeRF. VARIANTS="name:ARGS;name:ARGS" re-runs the relight
+# stage alone on copies of the trained model with extra `nerfpt train` ARGS (e.g. --relight-normals density) and
+# scores each one's fields.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_out}
@@ -15,6 +19,9 @@ bin=/tmp/nerfpt-gpu/bin
 data=.gpu/relight/dev
 work=/tmp/relight
 mkdir -p $work/pred
+score() {  # score LABEL PRED_DIR [score.py options]
+    PYTHONPATH=scripts/exr_shim python3 .gpu/relight/score.py $data "$2" --label "$1" "${@:3}" | tee -a "$out/score.log"
+}
 start=$(date +%s.%N)
 timeout 400 $bin/nerfpt train $data -o $work/dev.npt --backend cuda --time "${TRAIN_SECONDS:-60}" --relightable \
     --force 2>&1 | tr '\r' '\n' | grep -v -E '^train \[|^relight: (fit|surface) \[' | tee "$out/train.log"
@@ -22,27 +29,55 @@ echo "train + relight wall: $(awk "BEGIN {print $(date +%s.%N) - $start}") s" | 
 $bin/nerfpt info $work/dev.npt | tee -a "$out/train.log"
 timeout 300 $bin/relight_fields $work/dev.npt $data/transforms_test.json $work/pred/aov --spp 8 --backend cuda \
     | tee "$out/fields.log"
-PYTHONPATH=scripts/exr_shim python3 .gpu/relight/score.py $data $work/pred --normals-zup --label dev | tee "$out/score.log"
+score dev $work/pred --normals-zup
+if [[ ${ESTIMATORS:-0} == 1 ]]; then
+    for est in "density --normal-step 0.004" "density --normal-step 0.012" "depth --normal-pixels 1" \
+               "depth --normal-pixels 2" "depth --normal-pixels 4"; do
+        name=$(echo "$est" | tr -d ' -' | tr '.' '_')
+        timeout 200 $bin/relight_fields $work/dev.npt $data/transforms_test.json $work/est_$name/aov --spp 2 \
+            --backend cuda --normals $est | tee -a "$out/fields.log"
+        score "estimator-$name" $work/est_$name --normals-zup
+    done
+fi
+IFS=';' read -ra variants <<<"${VARIANTS:-}"
+for v in "${variants[@]}"; do
+    name=${v%%:*}
+    args=${v#*:}
+    cp $work/dev.npt $work/var.npt
+    start=$(date +%s.%N)
+    # shellcheck disable=SC2086
+    timeout 300 $bin/nerfpt train $data -o $work/var.npt --backend cuda --time "${TRAIN_SECONDS:-60}" --resume \
+        --relightable $args 2>&1 | tr '\r' '\n' | grep -E 'relight' | grep -v -E '^relight: (fit|surface) \[' |
+        sed "s/^/[$name] /" | tee -a "$out/variants.log"
+    echo "[$name] relight stage wall: $(awk "BEGIN {print $(date +%s.%N) - $start}") s" | tee -a "$out/variants.log"
+    timeout 200 $bin/relight_fields $work/var.npt $data/transforms_test.json $work/var_$name/aov --spp 4 \
+        --backend cuda | sed "s/^/[$name] /" | tee -a "$out/fields.log"
+    score "variant-$name" $work/var_$name --normals-zup
+done
 if [[ ${RELIT:-0} == 1 ]]; then
     BIN=$bin MODEL=$work/dev.npt DATA=$data PRED=$work/pred bench/relight_dev.sh render 2>&1 | tee "$out/relit.log"
     # The render's AOVs replaced relight_fields' (world normals of the nerfpt scene, +Y up).
-    PYTHONPATH=scripts/exr_shim python3 .gpu/relight/score.py $data $work/pred --label dev-render | tee -a "$out/score.log"
+    score dev-render $work/pred
 fi
 if [[ ${EMISSIVE:-0} == 1 ]]; then
     # The baseline: the same model rendered as today, emissive (its capture light baked in).
     SHADING=emissive BIN=$bin MODEL=$work/dev.npt DATA=$data PRED=$work/emissive bench/relight_dev.sh render 2>&1 |
         tee "$out/emissive.log"
-    PYTHONPATH=scripts/exr_shim python3 .gpu/relight/score.py $data $work/emissive --label dev-emissive | tee -a "$out/score.log"
+    score dev-emissive $work/emissive
 fi
 if [[ -n ${GTEST_FILTER:-} ]]; then
     timeout "${TEST_SECONDS:-300}" scripts/gpu_check.sh run --gtest_filter="$GTEST_FILTER" >"$out/gpu_tests.log" 2>&1
     grep -E "PASSED|FAILED|SKIPPED|Failure|error|relMSE" "$out/gpu_tests.log" | head -40
 fi
-python3 - "$work/pred" "$out" <<'PY'
+PYTHONPATH=scripts/exr_shim python3 - "$work/pred" "$out" <<'PY'
 # A strip of test views 0, 5, 10: albedo and normal (and relit views where they exist), as one PNG.
 import os, sys
-os.environ.setdefault('OPENCV_IO_ENABLE_OPENEXR', '1')
 import cv2, numpy as np
+import OpenImageIO as oiio  # scripts/exr_shim on the GPU machine: cv2 there cannot read EXR
+def read(path):
+    inp = oiio.ImageInput.open(path)
+    spec = inp.spec(); px = inp.read_image(0, 0, 0, spec.nchannels, 'float'); inp.close()
+    return np.asarray(px, np.float32).reshape(spec.height, spec.width, spec.nchannels)
 pred, out = sys.argv[1], sys.argv[2]
 rows = []
 for name, f in (('albedo', 'aov/albedo_%d.exr'), ('normal', 'aov/normal_%d.exr'), ('sunset', 'relit/sunset/r_%d.exr'),
@@ -51,10 +86,10 @@ for name, f in (('albedo', 'aov/albedo_%d.exr'), ('normal', 'aov/normal_%d.exr')
     for k in (0, 5, 10):
         p = os.path.join(pred, f % k)
         if not os.path.exists(p): break
-        im = cv2.imread(p, cv2.IMREAD_UNCHANGED)[..., :3].astype(np.float32)
+        im = read(p)[..., :3]
         if name == 'normal': im = im * 0.5 + 0.5
         im = np.clip(im, 0, 1) ** (1 / 2.2)
-        tiles.append((im * 255).astype(np.uint8))
+        tiles.append((im * 255).astype(np.uint8)[..., ::-1])  # RGB -> cv2's BGR
     if len(tiles) == 3: rows.append(np.concatenate(tiles, 1))
 if rows: cv2.imwrite(os.path.join(out, 'relight_views.png'), np.concatenate(rows, 0))
 PY

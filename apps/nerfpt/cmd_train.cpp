@@ -71,6 +71,13 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "Surface points the relight stage fits, one per training ray that hits the object "
                     "(default: 16384)")
         ->check(CLI::Range(64, 1 << 22));
+    cmd->add_option("--relight-directions", args.relight_directions,
+                    "Light directions per surface point (visibility and indirect light toward each; default: 64)")
+        ->check(CLI::Range(4, 1024));
+    cmd->add_option("--relight-normals", args.relight_normals,
+                    "The surface normal the stage shades with and the normal field learns: 'depth' (crossed "
+                    "expected-depth stencil around the pixel, the default) or 'density' (-grad log sigma)")
+        ->check(CLI::IsMember({"depth", "density"}));
     cmd->add_flag("--resume", args.resume, "Continue training the model in --output where it stopped");
     cmd->add_flag("--force", args.force, "Overwrite --output if it exists (without --resume)")
         ->excludes(cmd->get_option("--resume"));
@@ -223,6 +230,9 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         RelightStageOptions ro;
         ro.steps = args.relight_steps;
         ro.points = args.relight_points;
+        ro.directions = args.relight_directions;
+        ro.normals = args.relight_normals == "density" ? nerf::NormalEstimator::density
+                                                       : nerf::NormalEstimator::depth_stencil;
         ro.quiet = global.quiet;
         ro.backend = backend;
         interrupted = !run_relight_stage(model, data, ro, interrupts);

@@ -25,6 +25,8 @@ struct TrainArgs {
     bool relightable = false;        // run the relight stage after training (relight_stage.h)
     uint64_t relight_steps = 1500;
     int relight_points = 16384;
+    int relight_directions = 64;
+    std::string relight_normals = "depth";  // depth | density (nerf::NormalEstimator)
     bool force = false;
     // The command that continues after an interrupt, printed then; empty: this train command with --resume.
     std::string resume_hint;

@@ -52,6 +52,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     nerf::RelightSampleSettings ss;
     ss.points = options.points;
     ss.directions = options.directions;
+    ss.normals = options.normals;
     ss.seed = model.config.training.seed;
     StageLine line(options.quiet);
     std::unique_ptr<nerf::FieldQuery> query = nerf::make_field_query(options.backend, model);

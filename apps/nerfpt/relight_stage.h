@@ -8,6 +8,7 @@
 #include "nerf/backend/nerf_backend.h"
 #include "nerf/dataset.h"
 #include "nerf/nerf_model.h"
+#include "nerf/relight/relight_samples.h"
 
 namespace npt::cli {
 
@@ -17,6 +18,7 @@ struct RelightStageOptions {
     uint64_t steps = 1500;  // optimiser steps of the stage
     int points = 16384;
     int directions = 64;
+    nerf::NormalEstimator normals = nerf::NormalEstimator::depth_stencil;
     bool quiet = false;
     nerf::Backend backend = nerf::Backend::cpu;  // where the NeRF is evaluated while gathering surface points
 };

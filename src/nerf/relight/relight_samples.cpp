@@ -9,6 +9,7 @@
 #include "core/rng.h"
 #include "core/srgb.h"
 #include "nerf/relight/relit_spawn.h"
+#include "nerf/relight/surface_normals.h"
 #include "nerf/relight/wavefront_march.h"
 
 namespace npt::nerf {
@@ -25,6 +26,7 @@ struct Point {
     Vec3 position, wo, normal;
     Rgb target;
     uint32_t image = 0;
+    PixelRef pixel;
 };
 
 }  // namespace
@@ -68,41 +70,38 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
             owner.push_back(s);
             Point p;
             p.image = img;
+            p.pixel = PixelRef{img, px, py, jitter};
             p.wo = -r.ray.d;
             p.target = Rgb(srgb_to_linear(pix[0] / 255.0f), srgb_to_linear(pix[1] / 255.0f),
                            srgb_to_linear(pix[2] / 255.0f));
             pending.push_back(p);
         }
         march_wavefront(model, query, rays, WaveMode::event);
-        // 2. The density normal at each event: central differences of log sigma.
-        std::vector<Vec3> probes;
+        // 2. The surface normal at each event (surface_normals.h).
         std::vector<size_t> hit;
+        std::vector<Vec3> at, toward;
+        std::vector<PixelRef> pixels;
         for (size_t i = 0; i < rays.size(); ++i) {
             if (!rays[i].has_event) continue;
             hit.push_back(i);
-            for (int a = 0; a < 3; ++a) {
-                Vec3 e(0.0f);
-                e[a] = settings.normal_step;
-                probes.push_back(rays[i].event_position + e);
-                probes.push_back(rays[i].event_position - e);
-            }
+            at.push_back(rays[i].event_position);
+            toward.push_back(pending[i].wo);
+            pixels.push_back(pending[i].pixel);
         }
-        std::vector<float> sigma(probes.size());
-        if (!probes.empty()) query.evaluate(probes.data(), nullptr, probes.size(), sigma.data(), nullptr);
+        std::vector<Vec3> normal = density_normals(query, at, toward, settings.normal_step);
+        if (settings.normals == NormalEstimator::depth_stencil) {
+            const std::vector<Vec3> stencil =
+                depth_stencil_normals(model, query, data.cameras, pixels, settings.normal_pixels);
+            for (size_t h = 0; h < hit.size(); ++h)
+                if (dot(stencil[h], stencil[h]) > 0.0f) normal[h] = stencil[h];
+        }
         for (size_t h = 0; h < hit.size(); ++h) {
-            const size_t i = hit[h];
-            Vec3 g;
-            for (int a = 0; a < 3; ++a)
-                g[a] = std::log(std::max(sigma[6 * h + 2 * a], 1e-6f)) -
-                       std::log(std::max(sigma[6 * h + 2 * a + 1], 1e-6f));
-            const float len = length(g);
-            if (!(len > 0.0f) || !std::isfinite(len)) continue;
-            Point p = pending[i];
-            p.normal = -g / len;
-            if (dot(p.normal, p.wo) < 0.0f) p.normal = -p.normal;
-            p.position = rays[i].event_position;
+            if (!(dot(normal[h], normal[h]) > 0.0f)) continue;
+            Point p = pending[hit[h]];
+            p.normal = normal[h];
+            p.position = at[h];
             p.ok = true;
-            points[owner[i]] = p;
+            points[owner[hit[h]]] = p;
         }
         std::vector<size_t> still;
         for (size_t s : todo)

@@ -18,10 +18,17 @@
 
 namespace npt::nerf {
 
+enum class NormalEstimator {
+    density,        // -grad(log sigma) at the event (surface_normals.h)
+    depth_stencil,  // the expected-depth stencil around the pixel; the density normal where it has none
+};
+
 struct RelightSampleSettings {
     int points = 16384;           // surface points (training rays that hit the object)
     int directions = 64;          // light directions per point, stratified over the normal's hemisphere
+    NormalEstimator normals = NormalEstimator::depth_stencil;
     float normal_step = 0.004f;   // model units: central-difference step of the density gradient
+    float normal_pixels = 2.0f;   // the depth stencil's half width in pixels
     float min_alpha = 0.99f;      // pixels more transparent than this in the image are not used
     uint64_t seed = 1;
 };
@@ -31,7 +38,7 @@ struct RelightSamples {
     // Per point, model space.
     std::vector<Vec3> position;  // the scattering event
     std::vector<Vec3> wo;        // unit direction toward the camera
-    std::vector<Vec3> normal;    // -grad(log sigma), unit, turned toward wo
+    std::vector<Vec3> normal;    // the surface normal (settings.normals), unit, turned toward wo
     std::vector<Rgb> target;     // the pixel's colour, linear
     std::vector<uint32_t> image;  // training image index
     // Per point and direction ([point * directions + k]).

@@ -29,6 +29,7 @@ void march_wavefront(const NerfModel& model, FieldQuery& query, std::vector<Wave
         WaveRay& r = rays[i];
         r.transmittance = 1.0f;
         r.radiance = Rgb(0.0f);
+        r.depth = 0.0f;
         r.has_event = false;
         if (march_start(mp, grid, r.ray, r.jitter, &cursors[i])) live.push_back(uint32_t(i));
     }
@@ -89,8 +90,12 @@ void march_wavefront(const NerfModel& model, FieldQuery& query, std::vector<Wave
                         stop = true;
                     }
                 } else {
-                    const Rgb c(srgb_to_linear(rgb[s].x), srgb_to_linear(rgb[s].y), srgb_to_linear(rgb[s].z));
-                    r.radiance += c * (std::exp(lt) * -std::expm1(-d));
+                    const float w = std::exp(lt) * -std::expm1(-d);
+                    if (color) {
+                        const Rgb c(srgb_to_linear(rgb[s].x), srgb_to_linear(rgb[s].y), srgb_to_linear(rgb[s].z));
+                        r.radiance += c * w;
+                    }
+                    r.depth += w * dot(pos[s] - r.ray.o, r.ray.d);
                     lt -= d;
                     stop = lt < k_log_stop;
                 }

@@ -15,6 +15,7 @@ namespace npt::nerf {
 enum class WaveMode {
     radiance,  // transmittance and the emitted colour (linear), as a camera ray of the emissive renderer
     event,     // where the optical depth first reaches tau_target (the scattering event of a relit path)
+    depth,     // transmittance and the weighted distance (density only: no colour is evaluated)
 };
 
 struct WaveRay {
@@ -24,6 +25,7 @@ struct WaveRay {
     // Results.
     float transmittance = 1.0f;  // 0 once below 1e-4
     Rgb radiance{0.0f};
+    float depth = 0.0f;  // radiance and depth modes: sum of the volume weights times the distance along the ray
     bool has_event = false;
     Vec3 event_position{0.0f};
 };
