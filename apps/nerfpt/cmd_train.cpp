@@ -78,6 +78,12 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "The surface normal the stage shades with and the normal field learns: 'depth' (crossed "
                     "expected-depth stencil around the pixel, the default) or 'density' (-grad log sigma)")
         ->check(CLI::IsMember({"depth", "density"}));
+    cmd->add_option("--relight-batch", args.relight_batch, "Surface points per optimiser step (default: 1024)")
+        ->check(CLI::Range(16, 1 << 20));
+    cmd->add_option("--relight-normal-smoothing", args.relight_smoothing,
+                    "Radius (model units, the unit cube) over which the surface normals are averaged, edges kept: "
+                    "removes the small bumps a NeRF carves into its density (default: 0.01; 0 turns it off)")
+        ->check(CLI::Range(0.0f, 0.5f));
     cmd->add_flag("--resume", args.resume, "Continue training the model in --output where it stopped");
     cmd->add_flag("--force", args.force, "Overwrite --output if it exists (without --resume)")
         ->excludes(cmd->get_option("--resume"));
@@ -231,6 +237,8 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         ro.steps = args.relight_steps;
         ro.points = args.relight_points;
         ro.directions = args.relight_directions;
+        ro.batch = args.relight_batch;
+        ro.normal_smoothing = args.relight_smoothing;
         ro.normals = args.relight_normals == "density" ? nerf::NormalEstimator::density
                                                        : nerf::NormalEstimator::depth_stencil;
         ro.quiet = global.quiet;

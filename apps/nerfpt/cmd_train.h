@@ -26,6 +26,8 @@ struct TrainArgs {
     uint64_t relight_steps = 1500;
     int relight_points = 16384;
     int relight_directions = 64;
+    int relight_batch = 1024;
+    float relight_smoothing = 0.01f;
     std::string relight_normals = "depth";  // depth | density (nerf::NormalEstimator)
     bool force = false;
     // The command that continues after an interrupt, printed then; empty: this train command with --resume.

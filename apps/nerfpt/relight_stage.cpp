@@ -53,6 +53,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ss.points = options.points;
     ss.directions = options.directions;
     ss.normals = options.normals;
+    ss.normal_smoothing = options.normal_smoothing;
     ss.seed = model.config.training.seed;
     StageLine line(options.quiet);
     std::unique_ptr<nerf::FieldQuery> query = nerf::make_field_query(options.backend, model);
@@ -69,6 +70,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
 
     nerf::RelightTrainSettings ts;
     ts.seed = model.config.training.seed;
+    ts.batch = options.batch;
     nerf::RelightTrainer trainer(model, data.cameras.size(), samples, ts);
     nerf::RelightStepStats st;
     while (trainer.steps_done() < options.steps) {

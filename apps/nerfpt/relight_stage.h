@@ -19,6 +19,8 @@ struct RelightStageOptions {
     int points = 16384;
     int directions = 64;
     nerf::NormalEstimator normals = nerf::NormalEstimator::depth_stencil;
+    int batch = 1024;              // points per optimiser step
+    float normal_smoothing = 0.01f;  // nerf::RelightSampleSettings::normal_smoothing
     bool quiet = false;
     nerf::Backend backend = nerf::Backend::cpu;  // where the NeRF is evaluated while gathering surface points
 };

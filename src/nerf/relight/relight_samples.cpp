@@ -137,6 +137,9 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
         out.target[j] = p.target;
         out.image[j] = p.image;
     }
+    out.normal = smooth_normals(out.position, out.normal, settings.normal_smoothing);
+    for (size_t j = 0; j < n; ++j)  // smoothing may turn a normal past the horizon of its own view
+        if (dot(out.normal[j], out.wo[j]) < 0.0f) out.normal[j] = points[found[j]].normal;
     const float min_step = model.march_params().min_step;
     for (size_t begin = 0; begin < n; begin += k_points_per_round) {
         const size_t end = std::min(n, begin + k_points_per_round);

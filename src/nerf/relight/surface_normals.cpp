@@ -1,7 +1,10 @@
 #include "nerf/relight/surface_normals.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "nerf/relight/wavefront_march.h"
 
@@ -13,7 +16,52 @@ constexpr float k_min_alpha = 0.5f;       // a stencil ray that is more transpar
 constexpr float k_max_stretch = 8.0f;     // the stencil's two arms differ more than this: it straddles an edge
 constexpr float k_min_facing = 0.05f;     // |cos| to the view below this: the plane is edge-on, an edge again
 
+// A cell of the smoothing's spatial hash: integer coordinates packed into one sortable key.
+uint64_t cell_key(int x, int y, int z) {
+    constexpr int64_t bias = 1 << 20;
+    return (uint64_t(x + bias) << 42) | (uint64_t(y + bias) << 21) | uint64_t(z + bias);
+}
+
 }  // namespace
+
+std::vector<Vec3> smooth_normals(const std::vector<Vec3>& points, const std::vector<Vec3>& normals, float radius) {
+    if (!(radius > 0.0f) || points.empty()) return normals;
+    const float inv_cell = 1.0f / radius;
+    auto cell_of = [&](Vec3 p, int a) { return int(std::floor(p[a] * inv_cell)); };
+    // Points sorted by cell, so that a cell's points are one run found by binary search.
+    std::vector<std::pair<uint64_t, uint32_t>> order(points.size());
+    for (size_t i = 0; i < points.size(); ++i)
+        order[i] = {cell_key(cell_of(points[i], 0), cell_of(points[i], 1), cell_of(points[i], 2)), uint32_t(i)};
+    std::sort(order.begin(), order.end());
+    const float inv_two_sigma2 = 1.0f / (2.0f * 0.25f * radius * radius);
+    std::vector<Vec3> out(normals.size());
+    tbb::parallel_for(size_t(0), points.size(), [&](size_t i) {
+        const Vec3 ni = normals[i];
+        if (!(dot(ni, ni) > 0.0f)) {
+            out[i] = ni;
+            return;
+        }
+        const int cx = cell_of(points[i], 0), cy = cell_of(points[i], 1), cz = cell_of(points[i], 2);
+        Vec3 sum(0.0f);
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const uint64_t key = cell_key(cx + dx, cy + dy, cz + dz);
+                    auto it = std::lower_bound(order.begin(), order.end(), std::make_pair(key, uint32_t(0)));
+                    for (; it != order.end() && it->first == key; ++it) {
+                        const Vec3 d = points[it->second] - points[i];
+                        const float d2 = dot(d, d);
+                        if (d2 > radius * radius) continue;
+                        const float agree = std::max(0.0f, dot(ni, normals[it->second]));
+                        const float a2 = agree * agree;
+                        sum += normals[it->second] * (std::exp(-d2 * inv_two_sigma2) * a2 * a2);
+                    }
+                }
+        const float len = length(sum);
+        out[i] = len > 0.0f ? sum / len : ni;
+    });
+    return out;
+}
 
 std::vector<Vec3> density_normals(FieldQuery& query, const std::vector<Vec3>& points,
                                   const std::vector<Vec3>& toward, float step) {

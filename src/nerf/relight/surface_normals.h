@@ -38,4 +38,11 @@ std::vector<Vec3> depth_stencil_normals(const NerfModel& model, FieldQuery& quer
                                         const std::vector<Camera>& cameras, const std::vector<PixelRef>& pixels,
                                         float half_width);
 
+// Each normal replaced by the normalised weighted mean of the normals of the points within `radius` of its point
+// (model units): weights fall off as a Gaussian of the distance (sigma = radius / 2) and with the normals'
+// agreement, max(0, n_i . n_j)^4, so that the two sides of a thin part or the faces of an edge do not blend.
+// What it removes: a NeRF's small bumps (it carves texture edges into its density, and noise). What it keeps:
+// shape larger than the radius. Zero normals stay zero and are ignored; radius <= 0 returns the input.
+std::vector<Vec3> smooth_normals(const std::vector<Vec3>& points, const std::vector<Vec3>& normals, float radius);
+
 }  // namespace npt::nerf
