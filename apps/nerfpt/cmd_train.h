@@ -24,10 +24,10 @@ struct TrainArgs {
     bool resume = false;
     bool relightable = false;        // run the relight stage after training (relight_stage.h)
     uint64_t relight_steps = 1500;
-    int relight_points = 16384;
-    int relight_directions = 64;
-    int relight_batch = 1024;
-    float relight_smoothing = 0.01f;
+    int relight_points = 0;      // 0: the backend's default (relight_stage.h)
+    int relight_directions = 16;
+    int relight_batch = 0;       // 0: the backend's default
+    float relight_smoothing = 0.02f;
     std::string relight_normals = "depth";  // depth | density (nerf::NormalEstimator)
     bool force = false;
     // The command that continues after an interrupt, printed then; empty: this train command with --resume.

@@ -17,10 +17,10 @@ class InterruptGuard;
 struct RelightStageOptions {
     uint64_t steps = 1500;  // optimiser steps of the stage
     int points = 16384;
-    int directions = 64;
+    int directions = 16;
     nerf::NormalEstimator normals = nerf::NormalEstimator::depth_stencil;
     int batch = 1024;              // points per optimiser step
-    float normal_smoothing = 0.01f;  // nerf::RelightSampleSettings::normal_smoothing
+    float normal_smoothing = 0.02f;  // nerf::RelightSampleSettings::normal_smoothing
     bool quiet = false;
     nerf::Backend backend = nerf::Backend::cpu;  // where the NeRF is evaluated while gathering surface points
 };

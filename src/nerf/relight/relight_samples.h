@@ -25,11 +25,11 @@ enum class NormalEstimator {
 
 struct RelightSampleSettings {
     int points = 16384;           // surface points (training rays that hit the object)
-    int directions = 64;          // light directions per point, stratified over the normal's hemisphere
+    int directions = 16;          // light directions per point, stratified over the normal's hemisphere
     NormalEstimator normals = NormalEstimator::depth_stencil;
     float normal_step = 0.004f;   // model units: central-difference step of the density gradient
     float normal_pixels = 2.0f;   // the depth stencil's half width in pixels
-    float normal_smoothing = 0.01f;  // model units: radius of smooth_normals over the points (0: off)
+    float normal_smoothing = 0.02f;  // model units: radius of smooth_normals over the points (0: off)
     float min_alpha = 0.99f;      // pixels more transparent than this in the image are not used
     uint64_t seed = 1;
 };
