@@ -147,7 +147,7 @@ struct Server::Impl {
         void read() {
             ws.async_read(buffer, [self = shared_from_this()](beast::error_code ec, size_t) {
                 if (ec) {
-                    if (ec != websocket::error::closed && ec != asio::error::operation_aborted)
+                    if (ec != websocket::error::closed && ec != asio::error::operation_aborted && ec != asio::error::eof)
                         spdlog::warn("serve: page {}: {}; closing it", self->id, ec.message());
                     self->close();
                     return;
@@ -249,7 +249,7 @@ struct Server::Impl {
                      const std::string& cookie = {}, bool head = false) {
             auto res = std::make_shared<http::response<http::string_body>>(status, 11);
             res->set(http::field::server, "nerfpt");
-            res->set(http::field::content_type, type);
+            res->set(http::field::content_type, std::string(type));
             res->set(http::field::cache_control, "no-store");
             res->set("X-Content-Type-Options", "nosniff");
             if (!cookie.empty()) res->set(http::field::set_cookie, cookie);
