@@ -49,12 +49,21 @@ let state = null;
 let lastCameraSent = 0;
 let cameraDirty = false;
 
+// Both canvases hold the image's pixels and are shown as large as the view allows, at the image's aspect.
+function fitCanvases() {
+  const view = document.getElementById('view').getBoundingClientRect();
+  const w = imageCanvas.width, h = imageCanvas.height;
+  const s = Math.min(view.width / w, view.height / h);
+  for (const c of [imageCanvas, overlay]) { c.style.width = `${Math.floor(w * s)}px`; c.style.height = `${Math.floor(h * s)}px`; }
+}
+window.addEventListener('resize', fitCanvases);
 function setSize(w, h) {
   if (imageCanvas.width !== w || imageCanvas.height !== h) {
     imageCanvas.width = w; imageCanvas.height = h;
     renderer.setSize(w, h, false);
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
+    fitCanvases();
   }
 }
 
@@ -311,4 +320,12 @@ ws.onmessage = async (ev) => {
 // For the browser test: a pixel of the image as shown (x, y in full-resolution pixels).
 test.pixel = (x, y) => Array.from(ctx2d.getImageData(x, y, 1, 1).data.slice(0, 3));
 test.select = select;
+test.gizmo = gizmo;
+test.groups = () => volumeGroups;
 test.camera = () => cameraMessage();
+// Page coordinates of a world point (for the test's gizmo drag).
+test.project = (p) => {
+  const v = new THREE.Vector3(...p).project(camera);
+  const r = overlay.getBoundingClientRect();
+  return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
+};
