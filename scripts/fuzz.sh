@@ -2,7 +2,7 @@
 # Fuzzes every loader with libFuzzer (clang, ASan + UBSan) for SECONDS each (default 60), one after the other
 # (NERFPT_FUZZ_JOBS at once), or until NERFPT_FUZZ_RUNS executions when that comes first.
 # Usage: scripts/fuzz.sh [SECONDS] [TARGET...]   e.g. scripts/fuzz.sh 600 gltf obj
-# Targets: gltf obj json_scene transforms config model_file volume_grid ngp_snapshot colmap image.
+# Targets: gltf obj json_scene transforms config model_file volume_grid ngp_snapshot colmap image serve_message.
 #
 # Builds fuzz/ in build-san/ (scripts/configure_sanitize.sh), seeds each corpus from our own test data (the
 # files the unit tests write under build-san/test_tmp, running the loader tests first when there are none, and
@@ -16,7 +16,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 seconds=${1:-60}
 [[ $# -gt 0 ]] && shift
-all=(gltf obj json_scene transforms config model_file volume_grid ngp_snapshot colmap image)
+all=(gltf obj json_scene transforms config model_file volume_grid ngp_snapshot colmap image serve_message)
 targets=("$@")
 [[ ${#targets[@]} -gt 0 ]] || targets=("${all[@]}")
 
@@ -94,6 +94,14 @@ PY
         *.png | *.jpg | *.exr | *.hdr | *.bmp | *.tga) [[ $(stat -c %s "$f") -le 65536 ]] && seed image "$f" ;;
     esac
 done < <(find "$tmp_root" scenes -type f -print0 2>/dev/null)
+# nerfpt serve's messages: one of each type (tests/unit/serve_protocol_test.cpp has the bad ones).
+for m in '{"type":"camera","position":[0,0,5],"forward":[0,0,-1],"up":[0,1,0],"fov_deg":40}' \
+    '{"type":"volume","index":0,"translation":[1,0,0],"rotation":[0,0,0,1],"scale":[1,1,1],"density_scale":2,"crop":{"min":[0,0,0],"max":[1,1,1]},"shading":"relit"}' \
+    '{"type":"settings","spp":8,"max_depth":4,"exposure":-1,"preview_divisor":2}' '{"type":"light","index":0,"intensity_scale":0.5}' \
+    '{"type":"use_camera","index":0}' '{"type":"save"}' '{"type":"render","spp":4}' '{"type":"keyframes_save","seconds_per_key":1}'; do
+    n=$((n + 1))
+    printf '%s' "$m" >"$seeds/serve_message/$n.json"
+done
 # The raw-grid seeds above start with W (not 0 or 1): their first byte must differ from the OpenVDB/NanoVDB tags.
 echo "fuzz: $n seed files from $tmp_root and scenes/"
 

@@ -17,7 +17,10 @@ packages=(
     ffmpeg colmap  # nerfpt curate / poses / capture drive these command-line tools (and their end-to-end test)
     blender python3-numpy  # the Blender add-on (blender/nerfpt_blender) and its tests (ctest -L blender)
     clang libclang-rt-14-dev  # the ASan + UBSan build and the libFuzzer harnesses (scripts/test.sh, scripts/fuzz.sh)
+    libturbojpeg0-dev nodejs chromium  # nerfpt serve: JPEG frames; node + npm fetch the page's assets; its browser test
 )
+# Debian's nodejs comes without npm; NodeSource's nodejs has it and conflicts with Debian's npm package.
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,93 @@
+// nerfpt serve's page in headless chromium: it loads, frames arrive, a pixel of the constant-emission wall has
+// the wall's colour, a drag moves the camera, and a gizmo drag saved and rendered by `nerfpt render` moves the
+// cube. Screenshots go to $SHOTS (docs/images/ when run for the README).
+import { spawn, execFileSync } from 'node:child_process';
+import { readFileSync } from 'node:fs';
+import puppeteer from 'puppeteer-core';
+
+const { NERFPT, SCENE, SHOTS, CHROMIUM } = process.env;
+const fail = (msg) => { console.error('FAILED: ' + msg); process.exitCode = 1; throw new Error(msg); };
+const check = (ok, msg) => { if (!ok) fail(msg); console.log('ok: ' + msg); };
+
+const server = spawn(NERFPT, ['serve', SCENE, '--port', '0', '--preview', '2'], { stdio: ['ignore', 'pipe', 'inherit'] });
+const url = await new Promise((resolve, reject) => {
+  let out = '';
+  server.stdout.on('data', (d) => { out += d; const m = out.match(/at (http:\/\/\S+)/); if (m) resolve(m[1]); });
+  server.on('exit', (code) => reject(new Error('nerfpt serve exited with ' + code)));
+  setTimeout(() => reject(new Error('nerfpt serve printed no URL in 30 s')), 30000);
+});
+console.log('serving at ' + url);
+const browser = await puppeteer.launch({
+  executablePath: CHROMIUM, headless: true,
+  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--window-size=1200,800'],
+});
+try {
+  const page = await browser.newPage();
+  await page.setViewport({ width: 1200, height: 800 });
+  page.on('pageerror', (e) => console.error('page error: ' + e.message));
+  await page.goto(url);
+  // The wall's linear (0.5, 0.25, 0.125) through the sRGB curve: (188, 137, 99).
+  await page.waitForFunction(() => window.nerfpt && window.nerfpt.header && window.nerfpt.header.spp >= 4, { timeout: 30000 });
+  const wall = await page.evaluate(() => window.nerfpt.pixel(130, 100));
+  const near = (a, b, tol) => a.every((v, k) => Math.abs(v - b[k]) <= tol);
+  check(near(wall, [188, 137, 99], 6), `wall pixel ${wall} is the wall's colour (188,137,99) within JPEG error`);
+  const cubeX = Math.round(80 - 60 / (5 * Math.tan(Math.PI / 9)));
+  const cube = await page.evaluate((x) => window.nerfpt.pixel(x, 60), cubeX);
+  check(cube.every((v) => v >= 240), `cube pixel ${cube} at (${cubeX}, 60) is white`);
+  await page.screenshot({ path: `${SHOTS}/serve_viewer.png` });
+
+  // A drag on the view orbits the camera: a frame from another camera arrives.
+  const before = await page.evaluate(() => window.nerfpt.header.camera.position);
+  const box = await (await page.$('#overlay')).boundingBox();
+  await page.mouse.move(box.x + box.width * 0.7, box.y + box.height * 0.8);
+  await page.mouse.down();
+  for (let i = 1; i <= 10; ++i) await page.mouse.move(box.x + box.width * 0.7 + 15 * i, box.y + box.height * 0.8, { steps: 2 });
+  await page.mouse.up();
+  await page.waitForFunction((p) => {
+    const c = window.nerfpt.header.camera.position;
+    return Math.hypot(c[0] - p[0], c[1] - p[1], c[2] - p[2]) > 0.05;
+  }, { timeout: 20000 }, before);
+  const after = await page.evaluate(() => window.nerfpt.header.camera.position);
+  check(true, `a drag moved the camera from [${before.map((v) => v.toFixed(2))}] to [${after.map((v) => v.toFixed(2))}]`);
+
+  // Back to the scene's camera; select the cube and drag its gizmo's X arrow to the right.
+  await page.evaluate(() => window.nerfpt.send({ type: 'use_camera', index: 0 }));
+  await page.waitForFunction(() => Math.abs(window.nerfpt.header.camera.position[0]) < 1e-6 && window.nerfpt.header.spp >= 1, { timeout: 20000 });
+  await new Promise((r) => setTimeout(r, 300));
+  await page.evaluate(() => window.nerfpt.select(0));
+  await new Promise((r) => setTimeout(r, 200));
+  const [sx, sy] = await page.evaluate(() => window.nerfpt.project([-1 + 0.42, 0, 0]));
+  await page.mouse.move(sx, sy);
+  await page.mouse.down();
+  for (let i = 1; i <= 20; ++i) await page.mouse.move(sx + 20 * i, sy, { steps: 2 });
+  await page.mouse.up();
+  await page.waitForFunction(() => window.nerfpt.state.volumes[0].translation[0] > 0.2, { timeout: 20000 });
+  const tx = await page.evaluate(() => window.nerfpt.state.volumes[0].translation[0]);
+  check(true, `the gizmo drag moved the cube to x = ${tx.toFixed(3)}`);
+  await page.waitForFunction(() => window.nerfpt.header.spp >= 4, { timeout: 30000 });
+  await page.screenshot({ path: `${SHOTS}/serve_gizmo.png` });
+  const savedBefore = await page.evaluate(() => window.nerfpt.messages.filter((m) => m.type === 'saved').length);
+  await page.evaluate(() => window.nerfpt.send({ type: 'save' }));
+  await page.waitForFunction((n) => window.nerfpt.messages.filter((m) => m.type === 'saved').length > n, { timeout: 20000 }, savedBefore);
+
+  // nerfpt render of the saved file: the cube where the gizmo put it, the wall where it was.
+  const out = SCENE.replace(/scene\.json$/, 'saved_render.exr');
+  execFileSync(NERFPT, ['render', SCENE, '-o', out, '--spp', '1', '-q']);
+  const png = readFileSync(out.replace(/\.exr$/, '.png')).toString('base64');
+  const xNew = Math.round(80 + tx * 60 / (5 * Math.tan(Math.PI / 9)));
+  const pixels = await page.evaluate(async (data, xs) => {
+    const img = new Image();
+    img.src = 'data:image/png;base64,' + data;
+    await img.decode();
+    const c = document.createElement('canvas');
+    c.width = img.width; c.height = img.height;
+    const g = c.getContext('2d');
+    g.drawImage(img, 0, 0);
+    return xs.map((x) => Array.from(g.getImageData(x, 60, 1, 1).data.slice(0, 3)));
+  }, png, [xNew, cubeX]);
+  check(pixels[0].every((v) => v >= 240), `rendered saved scene: the cube at x pixel ${xNew} (${pixels[0]})`);
+  check(near(pixels[1], [188, 137, 99], 2), `rendered saved scene: the wall where the cube was (${pixels[1]})`);
+} finally {
+  await browser.close();
+  server.kill();
+}

@@ -1,0 +1,214 @@
+// nerfpt serve end to end in one process, through a Boost.Beast WebSocket client: the page's first state and
+// frames, a camera message giving a frame from the new camera, bad messages answered with errors while the
+// server goes on, a closed page freeing its session, the token, and an edit saved then rendered by `nerfpt
+// render` with the object where it was placed.
+#include <gtest/gtest.h>
+
+#include <boost/asio/connect.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
+#include <chrono>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "core/image_io.h"
+#include "serve/server.h"
+#include "serve/viewer.h"
+#include "test_support.h"
+
+namespace npt::serve {
+namespace {
+namespace fs = std::filesystem;
+namespace asio = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+using tcp = asio::ip::tcp;
+using json = nlohmann::json;
+
+fs::path copy_serve_scene() {
+    const fs::path dir = test::temp_dir();
+    for (const auto& e : fs::directory_iterator(test::test_data() / "serve")) fs::copy_file(e.path(), dir / e.path().filename());
+    return dir / "scene.json";
+}
+
+// A viewer and its server on a free port, served by a thread.
+struct Running {
+    std::unique_ptr<Server> server;
+    std::unique_ptr<Viewer> viewer;
+    std::thread thread;
+    Running(const fs::path& scene, const std::string& token = {}) {
+        ServerOptions so;
+        so.port = 0;
+        so.token = token;
+        server = std::make_unique<Server>(so);
+        ViewerOptions vo;
+        vo.scene = scene;
+        vo.preview_divisor = 2;
+        viewer = std::make_unique<Viewer>(vo, *server);
+        server->attach(viewer.get());
+        viewer->start();
+        thread = std::thread([this] { server->run(); });
+    }
+    ~Running() {
+        viewer->stop();
+        server->stop();
+        thread.join();
+    }
+};
+
+struct Client {
+    asio::io_context ioc;
+    websocket::stream<tcp::socket> ws{ioc};
+    explicit Client(uint16_t port, const std::string& query = {}) {
+        tcp::resolver resolver(ioc);
+        asio::connect(ws.next_layer(), resolver.resolve("127.0.0.1", std::to_string(port)));
+        ws.handshake("127.0.0.1:" + std::to_string(port), "/ws" + query);
+    }
+    void send(const std::string& text) {
+        ws.text(true);
+        ws.write(asio::buffer(text));
+    }
+    // The next message: JSON text, or a frame's header (type "frame") with its JPEG size in "jpeg_bytes".
+    json next() {
+        beast::flat_buffer b;
+        ws.read(b);
+        const std::string data = beast::buffers_to_string(b.data());
+        if (ws.got_text()) return json::parse(data);
+        EXPECT_GE(data.size(), 4u);
+        const uint32_t n = uint32_t(uint8_t(data[0])) | uint32_t(uint8_t(data[1])) << 8 |
+                           uint32_t(uint8_t(data[2])) << 16 | uint32_t(uint8_t(data[3])) << 24;
+        json h = json::parse(data.substr(4, n));
+        h["jpeg_bytes"] = data.size() - 4 - n;
+        EXPECT_EQ(uint8_t(data[4 + n]), 0xFF);  // JPEG SOI marker
+        EXPECT_EQ(uint8_t(data[5 + n]), 0xD8);
+        return h;
+    }
+    // Messages until one of `type` that satisfies `ok` (at most `limit` messages).
+    template <typename Fn>
+    json until(const std::string& type, Fn ok, int limit = 2000) {
+        for (int i = 0; i < limit; ++i) {
+            json m = next();
+            if (m["type"] == type && ok(m)) return m;
+        }
+        ADD_FAILURE() << "no '" << type << "' message";
+        return {};
+    }
+    json until(const std::string& type) {
+        return until(type, [](const json&) { return true; });
+    }
+};
+
+int http_get(uint16_t port, const std::string& target, const std::string& host = {}) {
+    asio::io_context ioc;
+    beast::tcp_stream stream(ioc);
+    tcp::resolver resolver(ioc);
+    stream.connect(resolver.resolve("127.0.0.1", std::to_string(port)));
+    http::request<http::string_body> req{http::verb::get, target, 11};
+    req.set(http::field::host, host.empty() ? "127.0.0.1:" + std::to_string(port) : host);
+    http::write(stream, req);
+    beast::flat_buffer b;
+    http::response<http::string_body> res;
+    http::read(stream, b, res);
+    return int(res.result_int());
+}
+
+TEST(ServeServer, PageGetsStateAndFramesAndACameraMoveGivesANewFrame) {
+    Running r(copy_serve_scene());
+    EXPECT_EQ(http_get(r.server->port(), "/"), 200);
+    EXPECT_EQ(http_get(r.server->port(), "/nothing.js"), 404);
+    EXPECT_EQ(http_get(r.server->port(), "/", "evil.example:80"), 403);  // DNS rebinding
+    Client c(r.server->port());
+    const json state = c.until("state");
+    EXPECT_EQ(state["width"], 160);
+    EXPECT_EQ(state["volumes"].size(), 1u);
+    EXPECT_EQ(state["volumes"][0]["name"], "cube");
+    const json first = c.until("frame");
+    EXPECT_GT(first["jpeg_bytes"].get<size_t>(), 100u);
+    // Accumulates to the scene's 4 spp at full resolution.
+    const json done = c.until("frame", [](const json& f) { return f["spp"] == 4 && !f["preview"].get<bool>(); });
+    EXPECT_EQ(done["width"], 160);
+
+    c.send(R"({"type": "camera", "position": [0.5, 0, 5], "forward": [0, 0, -1], "up": [0, 1, 0], "fov_deg": 40})");
+    const json moved = c.until("frame", [](const json& f) { return std::abs(f["camera"]["position"][0].get<double>() - 0.5) < 1e-6; });
+    EXPECT_TRUE(moved["preview"].get<bool>());  // the first frame after a move is the reduced one
+    EXPECT_EQ(moved["width"], 80);
+    EXPECT_TRUE(moved.contains("latency_ms"));
+    EXPECT_GT(moved["samples_per_s"].get<double>(), 0.0);
+}
+
+TEST(ServeServer, BadMessagesGetErrorsAndTheServerGoesOn) {
+    Running r(copy_serve_scene());
+    {
+        Client c(r.server->port());
+        c.until("state");
+        c.send("{not json");
+        EXPECT_NE(c.until("error")["message"].get<std::string>().find("not valid JSON"), std::string::npos);
+        c.send(R"({"type": "volume", "index": 7, "translation": [0, 0, 0]})");
+        EXPECT_NE(c.until("error")["message"].get<std::string>().find("volume.index"), std::string::npos);
+        c.send(R"({"type": "volume", "index": 0, "translation": [1e8, 0, 0]})");  // parses; beyond no bound here
+        c.send(R"({"type": "use_camera", "index": 3})");
+        EXPECT_NE(c.until("error")["message"].get<std::string>().find("use_camera.index"), std::string::npos);
+        // Oversized: the server closes this page's socket.
+        c.send(std::string(k_max_message_bytes + 10, ' '));
+        EXPECT_THROW(
+            for (int i = 0; i < 10000; ++i) c.next(), boost::system::system_error);
+    }
+    // A closed page frees its session.
+    for (int i = 0; i < 200 && r.server->sessions() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    EXPECT_EQ(r.server->sessions(), 0u);
+    // Two pages at once both get frames.
+    Client a(r.server->port()), b(r.server->port());
+    a.until("state");
+    b.until("state");
+    a.send(R"({"type": "camera", "position": [0, 0.5, 5], "forward": [0, 0, -1]})");
+    const auto from_move = [](const json& f) { return std::abs(f["camera"]["position"][1].get<double>() - 0.5) < 1e-6; };
+    a.until("frame", from_move);
+    b.until("frame", from_move);
+    EXPECT_EQ(r.server->sessions(), 2u);
+}
+
+TEST(ServeServer, TokenIsRequiredWhenSet) {
+    Running r(copy_serve_scene(), "abc123");
+    EXPECT_EQ(http_get(r.server->port(), "/"), 403);
+    EXPECT_EQ(http_get(r.server->port(), "/?token=abc12"), 403);
+    EXPECT_EQ(http_get(r.server->port(), "/?token=abc123"), 200);
+    EXPECT_THROW(Client(r.server->port()), boost::system::system_error);
+    Client c(r.server->port(), "?token=abc123");
+    c.until("state");
+    EXPECT_NE(r.server->url().find("?token=abc123"), std::string::npos);
+}
+
+TEST(ServeServer, EditSavedIsWhatNerfptRenderRenders) {
+    if (!fs::exists(test::cli_binary())) GTEST_SKIP() << "the nerfpt binary is not built";
+    const fs::path scene = copy_serve_scene();
+    {
+        Running r(scene);
+        Client c(r.server->port());
+        c.until("state");
+        // The cube from x = -1 to x = +1, then saved.
+        c.send(R"({"type": "volume", "index": 0, "translation": [1, 0, 0]})");
+        c.until("state", [](const json& s) { return s["volumes"][0]["translation"][0] == 1.0; });
+        c.send(R"({"type": "save"})");
+        const json saved = c.until("saved");
+        EXPECT_TRUE(saved["notes"].empty()) << saved.dump();
+    }
+    const fs::path out = scene.parent_path() / "out.exr";
+    ASSERT_EQ(test::run_cli({"render", scene.string(), "-o", out.string(), "--spp", "1"}, scene.parent_path() / "render.log"), 0)
+        << test::read_text(scene.parent_path() / "render.log");
+    const Image image = read_image(out, false);
+    // The camera at (0, 0, 5), 40 degrees: the cube's centre at x = +1 (z = 0) is at pixel 80 + 60 * 1 / (5 tan 20deg).
+    const int x_new = int(80 + 60.0 / (5 * std::tan(20 * 3.14159265358979 / 180)));
+    const int x_old = int(80 - 60.0 / (5 * std::tan(20 * 3.14159265358979 / 180)));
+    const Rgb at_new = image.rgb(x_new, 60), at_old = image.rgb(x_old, 60);
+    EXPECT_NEAR(at_new.x, 1.0f, 0.02f);  // the cube's white emission
+    EXPECT_NEAR(at_new.z, 1.0f, 0.02f);
+    EXPECT_NEAR(at_old.x, 0.5f, 0.01f);  // the wall where the cube was
+    EXPECT_NEAR(at_old.z, 0.125f, 0.01f);
+}
+
+}  // namespace
+}  // namespace npt::serve
