@@ -345,10 +345,15 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                 {"height", rig.height / downscale}});
     }
 
-    // The object frame goes into the model (its OBJF section): a scene's `volume` cube then stands the object on
-    // its ground (docs/formats.md). A later run with another --height rewrites it without retraining.
-    if (const auto frame = object_frame_of_record(record.stage("object")); frame && fs::exists(model, ec)) {
-        if (attach_object_frame(model, *frame) && !global.quiet)
+    // The object frame goes into the model (its OBJF section), its box refined by the model's density: a scene's
+    // `volume` cube then stands the object on its ground (docs/formats.md). Another --height rewrites it without
+    // retraining.
+    if (record.stage("object").value("found", false) && fs::exists(model, ec)) {
+        nlohmann::json object = record.stage("object");
+        const ObjectAttach a = attach_object(model, object, args.height_m);
+        if (a.record_changed) record.finish("object", object);
+        if (!global.quiet && !a.line.empty()) fmt::print("{}\n", a.line);
+        if (!global.quiet && a.model_written)
             fmt::print("model.npt: stores the object frame (`nerfpt info {}` shows it)\n", model.string());
     }
 

@@ -26,8 +26,14 @@ ObjectStageResult object_stage(const std::filesystem::path& colmap_model, double
 // The object frame recorded in capture.json's `object` entry, if it has one.
 std::optional<nerf::ObjectFrame> object_frame_of_record(const nlohmann::json& record);
 
-// Writes `frame` into the model file at `model` (its OBJF section) unless it already holds exactly that frame.
-// Returns whether the file was rewritten.
-bool attach_object_frame(const std::filesystem::path& model, const nerf::ObjectFrame& frame);
+// After training: refines the recorded box with the model's occupancy grid (capture/subject's
+// refine_box_with_field; redone when the model's step count differs from the one recorded), updates `record`
+// (the object entry: "sparse" keeps the first box, "dense" says what the model gave) and writes the object frame
+// into the model file unless it already holds exactly that frame.
+struct ObjectAttach {
+    bool record_changed = false, model_written = false;
+    std::string line;  // what the refinement found, empty when it was not redone
+};
+ObjectAttach attach_object(const std::filesystem::path& model, nlohmann::json& record, double height_m);
 
 }  // namespace npt::cli

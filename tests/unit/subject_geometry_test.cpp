@@ -30,10 +30,13 @@ struct SyntheticCapture {
     std::vector<Vector3d> points;
     std::vector<ViewRay> views;
     Truth truth;
+    Eigen::Matrix3d rot;
+    Vector3d shift;
+    Vector3d to_metres(const Vector3d& p) const { return rot.transpose() * (p - shift) / truth.units_per_metre; }
 };
 
 SyntheticCapture make_capture(uint64_t seed, double units_per_metre, double outlier_fraction = 0.05,
-                              double point_noise_m = 0.001) {
+                              double point_noise_m = 0.001, double object_top_seen = 1.0) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> uni(0.0, 1.0);
     std::normal_distribution<double> gauss(0.0, 1.0);
@@ -56,11 +59,11 @@ SyntheticCapture make_capture(uint64_t seed, double units_per_metre, double outl
     }
     for (int i = 0; i < 800; ++i) {  // the object's side and top
         const double a = 2 * k_pi * uni(rng);
-        if (i % 8 == 0) {
+        if (i % 8 == 0 && object_top_seen >= 1.0) {
             const double r = radius * std::sqrt(uni(rng));
             pts.push_back(noisy(base + Vector3d(r * std::cos(a), r * std::sin(a), height)));
         } else {
-            pts.push_back(noisy(base + Vector3d(radius * std::cos(a), radius * std::sin(a), height * uni(rng))));
+            pts.push_back(noisy(base + Vector3d(radius * std::cos(a), radius * std::sin(a), object_top_seen * height * uni(rng))));
         }
     }
     for (int k = 0; k < 5; ++k) {  // props: boxes up to 8 cm high
@@ -104,6 +107,8 @@ SyntheticCapture make_capture(uint64_t seed, double units_per_metre, double outl
         c.views.push_back(v);
     }
     c.truth = {rot * Vector3d::UnitZ(), to_capture(base), units_per_metre * height, units_per_metre};
+    c.rot = rot;
+    c.shift = shift;
     return c;
 }
 
@@ -183,6 +188,39 @@ TEST(SubjectGeometry, NoPointsOrNoPlaneAreErrorsNotGuesses) {
     for (const Vector3d& p : c.points)
         if (c.truth.up.dot(p - c.truth.base_center) > 1.0 * c.truth.units_per_metre) high.push_back(p);
     EXPECT_THROW(find_subject(high, c.views), Error);
+}
+
+// Few sparse points on the object (only its lower 40%, as SIFT finds on a smooth top): the sparse box is too
+// low; a dense field (the object, the props, the table under them all) gives the object's full height and
+// width, without the props beside it or the table below.
+TEST(SubjectGeometry, ADenseFieldGivesTheWholeObjectAndNotItsNeighbours) {
+    const double units = 3.0;
+    const SyntheticCapture c = make_capture(6, units, 0.05, 0.001, /*object_top_seen=*/0.4);
+    const SubjectGeometry g = find_subject(c.points, c.views);
+    EXPECT_LT(g.height, 0.5 * c.truth.height);  // the sparse estimate misses the top
+    const Vector3d base(0.02, -0.01, 0.75);
+    const auto opacity = [&](const Vector3d& p) {
+        const Vector3d m = c.to_metres(p);
+        if (m.z() < 0.75) return 1.0;  // the table slab (and everything under it)
+        const Vector3d q = m - base;
+        if (std::hypot(q.x(), q.y()) < 0.06 && q.z() < 0.22) return 1.0;  // the object
+        if (std::hypot(m.x() - 0.3, m.y()) < 0.05 && q.z() < 0.1) return 1.0;  // a prop 30 cm away
+        return 0.0;
+    };
+    const DenseBox d = refine_box_with_field(g, 0.004 * units, opacity);
+    ASSERT_TRUE(d.found);
+    EXPECT_NEAR(d.geometry.height, c.truth.height, 0.03 * c.truth.height);
+    // The box: the object's 12 cm diameter plus a cell or two each side, not the prop's 30 cm away.
+    const double width = (d.geometry.box_max.x() - d.geometry.box_min.x()) / units;
+    EXPECT_GT(width, 0.12);
+    EXPECT_LT(width, 0.14);
+    const Vector3d off = d.geometry.base_center - c.truth.base_center;
+    EXPECT_LT((off - off.dot(g.up) * g.up).norm(), 0.005 * units);
+    EXPECT_DOUBLE_EQ(d.geometry.box_min.z(), 0.0);
+    // An empty field finds nothing and leaves the geometry as it was.
+    const DenseBox none = refine_box_with_field(g, 0.004 * units, [](const Vector3d&) { return 0.0; });
+    EXPECT_FALSE(none.found);
+    EXPECT_EQ(none.geometry.height, g.height);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -176,6 +177,8 @@ SubjectGeometry find_subject(const std::vector<Vector3d>& points, const std::vec
         cam_height.push_back(g.plane.height(v.origin));
     }
     const double ring_radius = median(ring), top_reach = 1.5 * std::max(median(cam_height), 0.0);
+    g.ring_radius = ring_radius;
+    g.top_reach = top_reach;
     struct Local {
         double u, v, h, r;
     };
@@ -252,6 +255,71 @@ SubjectGeometry find_subject(const std::vector<Vector3d>& points, const std::vec
     g.box_min = Vector3d(u0 - uc - margin, v0 - vc - margin, 0.0);
     g.box_max = Vector3d(u1 - uc + margin, v1 - vc + margin, g.height + margin);
     return g;
+}
+
+DenseBox refine_box_with_field(const SubjectGeometry& g, double cell,
+                               const std::function<double(const Vector3d&)>& opacity, const DenseBoxSettings& s) {
+    DenseBox out;
+    out.geometry = g;
+    const double reach = 0.6 * g.ring_radius, z0 = s.clearance_fraction * g.scale, z1 = g.top_reach;
+    if (!(cell > 0) || !(reach > 0) || !(z1 > z0)) return out;
+    // The search box in the object frame, centred on the sparse box's vertical (the base centre).
+    const auto count = [&](double c) {
+        return size_t(std::ceil(2 * reach / c)) * size_t(std::ceil(2 * reach / c)) * size_t(std::ceil((z1 - z0) / c));
+    };
+    while (count(cell) > s.max_cells) cell *= 1.26;
+    const int nx = int(std::ceil(2 * reach / cell)), nz = int(std::ceil((z1 - z0) / cell));
+    const auto centre = [&](int i, int j, int k) {
+        return Vector3d(-reach + (i + 0.5) * cell, -reach + (j + 0.5) * cell, z0 + (k + 0.5) * cell);
+    };
+    const auto idx = [&](int i, int j, int k) { return (size_t(k) * size_t(nx) + size_t(j)) * size_t(nx) + size_t(i); };
+    std::vector<uint8_t> state(size_t(nx) * size_t(nx) * size_t(nz), 0);  // 1 occupied, 2 in the component
+    std::vector<std::array<int, 3>> stack;
+    for (int k = 0; k < nz; ++k)
+        for (int j = 0; j < nx; ++j)
+            for (int i = 0; i < nx; ++i) {
+                const Vector3d o = centre(i, j, k);
+                if (std::hypot(o.x(), o.y()) > reach) continue;
+                if (opacity(g.from_object(o)) < s.threshold) continue;
+                state[idx(i, j, k)] = 1;
+                const bool in_sparse_box = o.x() > g.box_min.x() && o.x() < g.box_max.x() && o.y() > g.box_min.y() &&
+                                           o.y() < g.box_max.y() && o.z() < g.box_max.z();
+                if (in_sparse_box) {
+                    state[idx(i, j, k)] = 2;
+                    stack.push_back({i, j, k});
+                }
+            }
+    if (stack.empty()) return out;
+    Vector3d lo = Vector3d::Constant(INFINITY), hi = Vector3d::Constant(-INFINITY);
+    while (!stack.empty()) {
+        const auto [i, j, k] = stack.back();
+        stack.pop_back();
+        ++out.cells;
+        const Vector3d o = centre(i, j, k);
+        lo = lo.cwiseMin(o);
+        hi = hi.cwiseMax(o);
+        for (int dk = -1; dk <= 1; ++dk)
+            for (int dj = -1; dj <= 1; ++dj)
+                for (int di = -1; di <= 1; ++di) {
+                    const int a = i + di, b = j + dj, c = k + dk;
+                    if (a < 0 || b < 0 || c < 0 || a >= nx || b >= nx || c >= nz) continue;
+                    uint8_t& st = state[idx(a, b, c)];
+                    if (st != 1) continue;
+                    st = 2;
+                    stack.push_back({a, b, c});
+                }
+    }
+    out.found = true;
+    out.cell = cell;
+    SubjectGeometry& r = out.geometry;
+    // Cell centres -> the cells' faces, plus one cell of margin.
+    const double pad = 1.5 * cell;
+    const double uc = 0.5 * (lo.x() + hi.x()), vc = 0.5 * (lo.y() + hi.y());
+    r.base_center = g.from_object(Vector3d(uc, vc, 0));
+    r.height = hi.z() + 0.5 * cell;
+    r.box_min = Vector3d(lo.x() - uc - pad, lo.y() - vc - pad, 0.0);
+    r.box_max = Vector3d(hi.x() - uc + pad, hi.y() - vc + pad, hi.z() + pad);
+    return out;
 }
 
 }  // namespace npt::capture::subject

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace npt::capture::subject {
@@ -62,6 +63,9 @@ struct SubjectGeometry {
     Vector3d box_min = Vector3d::Zero(), box_max = Vector3d::Zero();
     double height = 0;  // the seed points' high percentile above the plane (capture units), no margin
     size_t seed_points = 0;
+    // Where the object was searched: within ring_fraction (0.6) of the cameras' ring radius of the vertical
+    // through the fixation point, up to top_reach above the plane (capture units).
+    double ring_radius = 0, top_reach = 0;
 
     Vector3d to_object(const Vector3d& p) const {
         const Vector3d q = p - base_center;
@@ -83,5 +87,26 @@ Plane fit_support_plane(const std::vector<Vector3d>& points, const std::vector<V
 // missing (too few views or points, no plane, nothing above it).
 SubjectGeometry find_subject(const std::vector<Vector3d>& points, const std::vector<ViewRay>& views,
                              const SubjectSettings& settings = {});
+
+// The box again from a dense field (a first model's density), not the sparse points: COLMAP's points on the
+// object can be few (79 on a 22 cm object at --poses-quality fast), and their percentiles miss its top and
+// sides. `opacity(p)` (p in capture coordinates) is the field's opacity across one cell of `cell` capture units.
+// Cells above the plane by the clearance and inside the search cylinder whose opacity reaches `threshold` are
+// flood-filled (26-neighbours) from the occupied cells inside the sparse box; the box becomes the component's
+// extent plus one cell, from the plane up (the base stays the plane; the base centre moves under the new box).
+struct DenseBoxSettings {
+    double threshold = 0.5;
+    double clearance_fraction = 0.012;  // as SubjectSettings's
+    size_t max_cells = size_t(1) << 26;  // a coarser cell is used beyond this many
+};
+struct DenseBox {
+    bool found = false;     // false: no occupied cell inside the sparse box (g is returned unchanged)
+    size_t cells = 0;       // in the component
+    double cell = 0;        // the cell size used, capture units
+    SubjectGeometry geometry;  // g with the new box, height and base centre
+};
+DenseBox refine_box_with_field(const SubjectGeometry& g, double cell,
+                               const std::function<double(const Vector3d&)>& opacity,
+                               const DenseBoxSettings& settings = {});
 
 }  // namespace npt::capture::subject
