@@ -49,9 +49,11 @@ def main():
     size = [s * (box['max'][i] - box['min'][i]) for i in range(3)]
     tsize = [truth['box_max'][i] - truth['box_min'][i] for i in range(3)]
     ok = up_err <= 2.0 and abs(plane_off) <= 0.01 * th
+    sparse = obj.get('sparse')
+    first = f'first box height {1000 * s * sparse["height"]:.1f} mm, ' if sparse else ''
     print(f'{truth.get("kind", "?")}: up {up_err:.2f} deg, base plane {100 * plane_off / th:+.2f}% of the height '
           f'({1000 * plane_off:+.1f} mm), height {1000 * height:.1f} mm vs {1000 * th:.1f} '
-          f'({100 * (height - th) / th:+.1f}%), base centre {1000 * horiz:.1f} mm off, box '
+          f'({100 * (height - th) / th:+.1f}%; {first}{"dense" if obj.get("dense", {}).get("found") else "sparse"}), base centre {1000 * horiz:.1f} mm off, box '
           f'{" x ".join(f"{1000 * x:.0f}" for x in size)} mm (object {" x ".join(f"{1000 * x:.0f}" for x in tsize)}), '
           f'{obj["plane_inliers"]} plane points, {obj["seed_points"]} object points: '
           f'{"PASS" if ok else "FAIL"} (up <= 2 deg, plane <= 1%)')

@@ -267,8 +267,10 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
 
     // 3 object: cheap (no images), so redone whenever --height changes; the model is not retrained for it
     const nlohmann::json& done_object = record.stage("object");
+    // (and when an older build recorded it without the fields the dense refinement needs).
     if (record.done("object") && done_object.value("height_m", nlohmann::json(nullptr)) ==
-                                     (args.height_m > 0 ? nlohmann::json(args.height_m) : nlohmann::json(nullptr))) {
+                                     (args.height_m > 0 ? nlohmann::json(args.height_m) : nlohmann::json(nullptr)) &&
+        (!done_object.value("found", false) || done_object.contains("top_reach"))) {
         banner(global, 3, "object: done in an earlier run");
     } else {
         banner(global, 3, "object: supporting plane, up and the object's box");
@@ -310,6 +312,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
     const nlohmann::json train_target = {
         {"steps", args.train_steps}, {"time", target_seconds}, {"downscale", downscale}};
     std::error_code ec;
+    bool trained = false;  // in this run: the object's box is refined again from the new model
     if (record.done("train") && record.stage("train").value("target", nlohmann::json()) == train_target &&
         fs::exists(model, ec)) {
         banner(global, 5, "train: done in an earlier run (model.npt)");
@@ -334,6 +337,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         t.resume_hint = continue_hint;
         const int rc = run_train(t, global, interrupts);
         if (rc != 0) return rc;
+        trained = true;
         const nerf::NerfModel m = nerf::load_model(model);
         const double seconds = m.training ? m.training->elapsed_seconds : 0.0;
         const uint64_t steps = m.training ? m.training->adam.step : 0;
@@ -350,7 +354,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
     // retraining.
     if (record.stage("object").value("found", false) && fs::exists(model, ec)) {
         nlohmann::json object = record.stage("object");
-        const ObjectAttach a = attach_object(model, object, args.height_m);
+        const ObjectAttach a = attach_object(model, object, args.height_m, trained);
         if (a.record_changed) record.finish("object", object);
         if (!global.quiet && !a.line.empty()) fmt::print("{}\n", a.line);
         if (!global.quiet && a.model_written)

@@ -139,13 +139,13 @@ std::optional<nerf::ObjectFrame> object_frame_of_record(const nlohmann::json& re
     return nerf::object_frame_from_json(record["model_frame"], "capture.json: object.model_frame");
 }
 
-ObjectAttach attach_object(const fs::path& path, nlohmann::json& record, double height_m) {
+ObjectAttach attach_object(const fs::path& path, nlohmann::json& record, double height_m, bool retrained) {
     ObjectAttach out;
     if (!record.value("found", false)) return out;
     nerf::NerfModel m = nerf::load_model(path);
     const uint64_t steps = m.training ? m.training->adam.step : 0;
     const auto dense = record.find("dense");
-    if (dense == record.end() || dense->value("steps", uint64_t(0)) != steps) {
+    if (retrained || dense == record.end() || dense->value("steps", uint64_t(0)) != steps) {
         // The sparse geometry (kept under "sparse" once refined), refined by this model's occupancy grid.
         if (!record.contains("sparse"))
             record["sparse"] = {{"box", record["box"]}, {"height", record["height"]}, {"base_center", record["base_center"]}};

@@ -27,13 +27,14 @@ ObjectStageResult object_stage(const std::filesystem::path& colmap_model, double
 std::optional<nerf::ObjectFrame> object_frame_of_record(const nlohmann::json& record);
 
 // After training: refines the recorded box with the model's occupancy grid (capture/subject's
-// refine_box_with_field; redone when the model's step count differs from the one recorded), updates `record`
+// refine_box_with_field; redone when `retrained` or the model's step count differs from the one recorded), updates `record`
 // (the object entry: "sparse" keeps the first box, "dense" says what the model gave) and writes the object frame
 // into the model file unless it already holds exactly that frame.
 struct ObjectAttach {
     bool record_changed = false, model_written = false;
     std::string line;  // what the refinement found, empty when it was not redone
 };
-ObjectAttach attach_object(const std::filesystem::path& model, nlohmann::json& record, double height_m);
+ObjectAttach attach_object(const std::filesystem::path& model, nlohmann::json& record, double height_m,
+                           bool retrained);
 
 }  // namespace npt::cli
