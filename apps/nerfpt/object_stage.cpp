@@ -68,6 +68,12 @@ capture::subject::SubjectGeometry geometry_of_record(const nlohmann::json& j) {
     return g;
 }
 
+// Object units per capture unit: 1 without --height (the record holds null then).
+double metres_per_unit(const nlohmann::json& record) {
+    const auto it = record.find("metres_per_unit");
+    return it != record.end() && it->is_number() ? it->get<double>() : 1.0;
+}
+
 // The object frame of geometry g (metric when height_m > 0: scaled so that g.height is height_m) into the
 // record's model_frame, metric, height_m and metres_per_unit.
 void set_frame(nlohmann::json& record, const capture::subject::SubjectGeometry& g, double height_m) {
@@ -123,7 +129,7 @@ ObjectStageResult object_stage(const fs::path& colmap_model, double height_m) {
     r.record["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     set_frame(r.record, g, height_m);
     r.frame = object_frame_of_record(r.record);
-    const Vector3d size = (g.box_max - g.box_min) * r.record.value("metres_per_unit", 1.0);
+    const Vector3d size = (g.box_max - g.box_min) * metres_per_unit(r.record);
     r.line = fmt::format(
         "object: up ({:.3f}, {:.3f}, {:.3f}), {} of {} points on the supporting plane, {} on the object; first box "
         "{:.3g} x {:.3g} x {:.3g} {} (from the sparse points; the trained model refines it)",
@@ -178,7 +184,7 @@ ObjectAttach attach_object(const fs::path& path, nlohmann::json& record, double 
         record["base_center"] = array(r.base_center);
         set_frame(record, r, height_m);
         out.record_changed = true;
-        const double mpu = record.value("metres_per_unit", 1.0);
+        const double mpu = metres_per_unit(record);
         out.line = d.found ? fmt::format("object: the model's density gives a box of {:.3g} x {:.3g} x {:.3g} {} "
                                          "({} cells)",
                                          (r.box_max.x() - r.box_min.x()) * mpu, (r.box_max.y() - r.box_min.y()) * mpu,
