@@ -10,7 +10,8 @@
 #
 # Writes OUT_DIR/render/frame_NNNNN.png (existing frames are skipped, so an interrupted run resumes) and
 # OUT_DIR/truth.json (transforms.json layout: fl_x/fl_y/cx/cy/w/h and, per frame, the OpenGL camera-to-world
-# matrix, which is Blender's camera matrix_world). To make it a video as a phone would and keep every frame:
+# matrix, which is Blender's camera matrix_world; 'object': the subject's up, supporting plane height, base
+# centre, height and bounding box in Blender's world, metres). To make it a video as a phone would and keep every frame:
 #   ffmpeg -framerate 30 -i OUT_DIR/render/frame_%05d.png -c:v libx264 -crf 18 -pix_fmt yuv420p OUT_DIR/handheld.mp4
 #   nerfpt curate OUT_DIR/handheld.mp4 -o OUT_DIR/frames --target-frames N
 # (curate numbers frames from 0 as the video does, so truth.json's names match; scripts/bench_poses.sh does this.)
@@ -107,16 +108,17 @@ kind = rng.choice(['vase', 'bottle', 'stack'])
 obj_mat = material('object', rng.choice(['noise', 'voronoi', 'checker']),
                    (rng.random(), rng.random(), rng.random()), (rng.random(), rng.random(), rng.random()),
                    rng.uniform(3, 8), roughness=0.3)
+parts = []  # the object's meshes: its ground truth (box, height) is their bounding box
 if kind == 'vase':
-    add(cyl, (0, 0, top_z + 0.1), (0.07, 0.07, 0.1), obj_mat)
-    add(sphere, (0, 0, top_z + 0.2), (0.09, 0.09, 0.07), obj_mat)
+    parts.append(add(cyl, (0, 0, top_z + 0.1), (0.07, 0.07, 0.1), obj_mat))
+    parts.append(add(sphere, (0, 0, top_z + 0.2), (0.09, 0.09, 0.07), obj_mat))
 elif kind == 'bottle':
-    add(cyl, (0, 0, top_z + 0.09), (0.045, 0.045, 0.09), obj_mat)
-    add(cyl, (0, 0, top_z + 0.22), (0.015, 0.015, 0.04), obj_mat)
-    add(sphere, (0, 0, top_z + 0.18), (0.045, 0.045, 0.03), obj_mat)
+    parts.append(add(cyl, (0, 0, top_z + 0.09), (0.045, 0.045, 0.09), obj_mat))
+    parts.append(add(cyl, (0, 0, top_z + 0.22), (0.015, 0.015, 0.04), obj_mat))
+    parts.append(add(sphere, (0, 0, top_z + 0.18), (0.045, 0.045, 0.03), obj_mat))
 else:
-    add(cube, (0, 0, top_z + 0.05), (0.08, 0.06, 0.05), obj_mat, rotation=(0, 0, 0.3))
-    add(sphere, (0, 0, top_z + 0.16), (0.06, 0.06, 0.06), obj_mat)
+    parts.append(add(cube, (0, 0, top_z + 0.05), (0.08, 0.06, 0.05), obj_mat, rotation=(0, 0, 0.3)))
+    parts.append(add(sphere, (0, 0, top_z + 0.16), (0.06, 0.06, 0.06), obj_mat))
 object_centre = Vector((0, 0, top_z + 0.12))
 
 # Props on the table around the object (books, a cup, a ball), none on the camera's path.
@@ -188,6 +190,14 @@ truth = {'fl_x': fy, 'fl_y': fy, 'cx': 0.5 * W, 'cy': 0.5 * H, 'w': W, 'h': H, '
 for k, m in enumerate(poses):
     name = f'frame_{k:05d}.png'
     truth['frames'].append({'file_path': name, 'transform_matrix': [list(row) for row in m]})
+# The object's ground truth in Blender's world (Z up, metres): what `nerfpt capture` should find (issue 25).
+bpy.context.view_layer.update()
+corners = [o.matrix_world @ Vector(c) for o in parts for c in o.bound_box]
+lo = [min(c[a] for c in corners) for a in range(3)]
+hi = [max(c[a] for c in corners) for a in range(3)]
+truth['object'] = {'kind': kind, 'up': [0, 0, 1], 'plane_z': top_z,
+                   'base_center': [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), top_z],
+                   'height': hi[2] - top_z, 'box_min': lo, 'box_max': hi}
 with open(os.path.join(out_dir, 'truth.json'), 'w') as f:
     json.dump(truth, f, indent=1)
 for k, m in enumerate(poses):

@@ -13,7 +13,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int k_record_version = 1;
-const char* const k_stage_order[] = {"curate", "poses", "split", "train", "eval", "turntable"};
+const char* const k_stage_order[] = {"curate", "poses", "object", "split", "train", "eval", "turntable"};
 
 double num(const nlohmann::json& j, const char* key) {
     const auto it = j.find(key);
@@ -95,6 +95,19 @@ std::string capture_report_markdown(const nlohmann::json& record) {
             num(p, "reprojection_px"), p.value("path_jumps", 0), num(p, "seconds"), num(p, "extraction_seconds"),
             num(p, "matching_seconds"), num(p, "mapping_seconds"));
         total += num(p, "seconds");
+    }
+    if (const auto o = get("object"); !o.empty()) {
+        if (o.value("found", false)) {
+            const auto& up = o["up"];
+            md += fmt::format("| object | up ({:.3f}, {:.3f}, {:.3f}), height {:.4g} {}, {} points on the supporting "
+                              "plane, {} on the object | {:.1f} s |\n",
+                              up[0].get<double>(), up[1].get<double>(), up[2].get<double>(),
+                              o.value("metric", false) ? o.value("height_m", 0.0) : num(o, "height"),
+                              o.value("metric", false) ? "m" : "capture units", o.value("plane_inliers", 0),
+                              o.value("seed_points", 0), num(o, "seconds"));
+        } else {
+            md += fmt::format("| object | not found: {} | |\n", o.value("reason", "?"));
+        }
     }
     if (const auto s = get("split"); !s.empty())
         md += fmt::format("| split | {} training frames, {} held out (every {}th) | |\n", s.value("train", 0),

@@ -19,7 +19,7 @@ class CaptureRecord {
     const nlohmann::json& stage(const std::string& name) const;
     // Records the stage's result and writes capture.json and report.md (atomically).
     void finish(const std::string& stage, nlohmann::json result);
-    // Drops `stage` and every later one (curate, poses, split, train, eval, turntable) and saves: their
+    // Drops `stage` and every later one (curate, poses, object, split, train, eval, turntable) and saves: their
     // results no longer hold once an earlier output changes.
     void forget_from(const std::string& stage);
     std::string markdown() const;

@@ -28,6 +28,7 @@
 #include "input_checks.h"
 #include "interrupt.h"
 #include "nerf/model_file.h"
+#include "object_stage.h"
 
 namespace npt::cli {
 namespace fs = std::filesystem;
@@ -37,7 +38,7 @@ namespace {
 // Automatic --downscale: the training images' longest side at most this. A few minutes of CPU training
 // cannot resolve more detail, and smaller images load faster and take less memory.
 constexpr int k_auto_train_side = 400;
-constexpr int k_stages = 6;
+constexpr int k_stages = 7;
 
 // What `--force` removes: only what capture itself writes, never the whole folder.
 const std::vector<std::string> k_outputs = {
@@ -96,11 +97,13 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         "Runs, in WORKDIR:\n"
         "  1 curate     VIDEO -> frames/ (nerfpt curate: sharpest frame per time window, subject check)\n"
         "  2 poses      frames/ -> transforms.json (nerfpt poses: COLMAP, one shared OPENCV camera)\n"
-        "  3 split      every --holdout-every'th frame -> transforms_test.json, the rest -> "
+        "  3 object     the supporting plane, up and the object's box from COLMAP's points -> the object frame\n"
+        "               the model carries (origin at the base centre, +Z up; metres with --height)\n"
+        "  4 split      every --holdout-every'th frame -> transforms_test.json, the rest -> "
         "transforms_train.json\n"
-        "  4 train      -> model.npt (nerfpt train on the training frames, --train-time seconds)\n"
-        "  5 eval       PSNR/SSIM on the held-out frames -> eval/ (renders, comparisons, metrics.json)\n"
-        "  6 turntable  -> turntable.mp4, an orbit at the capture's camera distance, height and field of "
+        "  5 train      -> model.npt (nerfpt train on the training frames, --train-time seconds)\n"
+        "  6 eval       PSNR/SSIM on the held-out frames -> eval/ (renders, comparisons, metrics.json)\n"
+        "  7 turntable  -> turntable.mp4, an orbit at the capture's camera distance, height and field of "
         "view\n"
         "and writes capture.json (every stage's numbers) and report.md after each stage. Run the same "
         "command\n"
@@ -135,6 +138,10 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
                     "poses: fraction of the frames COLMAP must register, 0..1")
         ->check(CLI::Range(0.0, 1.0))
         ->capture_default_str();
+    cmd->add_option("--height", args.height_m,
+                    "object: the object's real height in metres: the model stands at real size (default: the "
+                    "capture's units)")
+        ->check(CLI::Range(1e-4, 1e4));
     cmd->add_option("--holdout-every", args.holdout_every,
                     "Hold out every Nth frame for the PSNR report, 2..1000; 0: train on all, no PSNR")
         ->check(CLI::Range(0, 1000))
@@ -225,7 +232,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         banner(global, 2, "poses: done in an earlier run (transforms.json)");
     } else {
         banner(global, 2, "poses: COLMAP");
-        record.forget_from("split");
+        record.forget_from("object");
         discard_trained(work, record);
         PosesArgs p;
         p.frames = frames.string();
@@ -254,21 +261,40 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                 {"mapping_cpu_seconds", s.cpu_seconds[2]},
                                 {"loop_closure_cpu_seconds", s.cpu_seconds[3]},
                                 {"loop_pairs", s.loop_pairs},
+                                {"model", fs::relative(s.model_folder, work).string()},
                                 {"seconds", clock.seconds()}});
     }
 
-    // 3 split
+    // 3 object: cheap (no images), so redone whenever --height changes; the model is not retrained for it
+    const nlohmann::json& done_object = record.stage("object");
+    // (and when an older build recorded it without the fields the dense refinement needs).
+    if (record.done("object") && done_object.value("height_m", nlohmann::json(nullptr)) ==
+                                     (args.height_m > 0 ? nlohmann::json(args.height_m) : nlohmann::json(nullptr)) &&
+        (!done_object.value("found", false) || done_object.contains("top_reach"))) {
+        banner(global, 3, "object: done in an earlier run");
+    } else {
+        banner(global, 3, "object: supporting plane, up and the object's box");
+        // Work folders from before the poses stage recorded its model: the usual place.
+        std::string model_dir = record.stage("poses").value("model", "");
+        if (model_dir.empty()) model_dir = fs::exists(work / "colmap" / "sparse_loops" / "0") ? "colmap/sparse_loops/0"
+                                                                                               : "colmap/sparse/0";
+        const ObjectStageResult o = object_stage(work / model_dir, args.height_m);
+        if (!global.quiet) fmt::print("{}\n", o.line);
+        record.finish("object", o.record);
+    }
+
+    // 4 split
     const bool hold_out = args.holdout_every > 0;
     if (record.done("split") && record.stage("split").value("every", -1) == args.holdout_every) {
-        banner(global, 3, "split: done in an earlier run");
+        banner(global, 4, "split: done in an earlier run");
     } else if (hold_out) {
-        banner(global, 3, fmt::format("split: holding out every {}th frame", args.holdout_every));
+        banner(global, 4, fmt::format("split: holding out every {}th frame", args.holdout_every));
         const capture::SplitCounts n = capture::split_transforms(transforms, args.holdout_every);
         if (!global.quiet) fmt::print("{} training frames, {} held out\n", n.train, n.test);
         discard_trained(work, record);  // a model trained on another split has seen the held-out frames
         record.finish("split", {{"every", args.holdout_every}, {"train", n.train}, {"test", n.test}});
     } else {
-        banner(global, 3, "split: none (--holdout-every 0), training on every frame");
+        banner(global, 4, "split: none (--holdout-every 0), training on every frame");
         for (const char* name : {"transforms_train.json", "transforms_test.json"}) {
             std::error_code ec;
             fs::remove(work / name, ec);
@@ -279,19 +305,20 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                       {{"every", 0}, {"train", record.stage("poses").value("registered", 0)}, {"test", 0}});
     }
 
-    // 4 train
+    // 5 train
     const capture::RigSummary rig = capture::summarize_rig(transforms);
     const int downscale = args.downscale > 0 ? args.downscale : auto_downscale(rig.width, rig.height);
     const double target_seconds = args.train_steps ? 0.0 : args.train_seconds;
     const nlohmann::json train_target = {
         {"steps", args.train_steps}, {"time", target_seconds}, {"downscale", downscale}};
     std::error_code ec;
+    bool trained = false;  // in this run: the object's box is refined again from the new model
     if (record.done("train") && record.stage("train").value("target", nlohmann::json()) == train_target &&
         fs::exists(model, ec)) {
-        banner(global, 4, "train: done in an earlier run (model.npt)");
+        banner(global, 5, "train: done in an earlier run (model.npt)");
     } else {
         const bool resume = fs::exists(model, ec);
-        banner(global, 4,
+        banner(global, 5,
                fmt::format("train: {}{}", resume ? "continuing model.npt to " : "",
                            args.train_steps ? fmt::format("{} steps", args.train_steps)
                                             : fmt::format("{:.0f} s", args.train_seconds)));
@@ -310,6 +337,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         t.resume_hint = continue_hint;
         const int rc = run_train(t, global, interrupts);
         if (rc != 0) return rc;
+        trained = true;
         const nerf::NerfModel m = nerf::load_model(model);
         const double seconds = m.training ? m.training->elapsed_seconds : 0.0;
         const uint64_t steps = m.training ? m.training->adam.step : 0;
@@ -321,13 +349,25 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                 {"height", rig.height / downscale}});
     }
 
-    // 5 eval
+    // The object frame goes into the model (its OBJF section), its box refined by the model's density: a scene's
+    // `volume` cube then stands the object on its ground (docs/formats.md). Another --height rewrites it without
+    // retraining.
+    if (record.stage("object").value("found", false) && fs::exists(model, ec)) {
+        nlohmann::json object = record.stage("object");
+        const ObjectAttach a = attach_object(model, object, args.height_m, trained);
+        if (a.record_changed) record.finish("object", object);
+        if (!global.quiet && !a.line.empty()) fmt::print("{}\n", a.line);
+        if (!global.quiet && a.model_written)
+            fmt::print("model.npt: stores the object frame (`nerfpt info {}` shows it)\n", model.string());
+    }
+
+    // 6 eval
     if (!hold_out) {
-        banner(global, 5, "eval: skipped (no held-out frames)");
+        banner(global, 6, "eval: skipped (no held-out frames)");
     } else if (record.done("eval")) {
-        banner(global, 5, "eval: done in an earlier run (eval/)");
+        banner(global, 6, "eval: done in an earlier run (eval/)");
     } else {
-        banner(global, 5, "eval: rendering the held-out frames");
+        banner(global, 6, "eval: rendering the held-out frames");
         EvalArgs e;
         e.model = model.string();
         e.data = work.string();
@@ -347,18 +387,18 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                {"seconds", clock.seconds()}});
     }
 
-    // 6 turntable, at the training size by default (even: the video is yuv420p)
+    // 7 turntable, at the training size by default (even: the video is yuv420p)
     const std::string res = args.turntable_res.empty() ? fmt::format("{}x{}", (rig.width / downscale) & ~1,
                                                                      (rig.height / downscale) & ~1)
                                                        : args.turntable_res;
     const nlohmann::json& done_turntable = record.stage("turntable");
     if (args.turntable_frames == 0) {
-        banner(global, 6, "turntable: skipped (--turntable-frames 0)");
+        banner(global, 7, "turntable: skipped (--turntable-frames 0)");
     } else if (record.done("turntable") && done_turntable.value("frames", 0) == args.turntable_frames &&
                done_turntable.value("res", "") == res) {
-        banner(global, 6, "turntable: done in an earlier run (turntable.mp4)");
+        banner(global, 7, "turntable: done in an earlier run (turntable.mp4)");
     } else {
-        banner(global, 6, "turntable: rendering turntable.mp4");
+        banner(global, 7, "turntable: rendering turntable.mp4");
         ViewArgs v;
         v.model = model.string();
         v.output = (work / "turntable.mp4").string();

@@ -24,6 +24,8 @@ struct CaptureArgs {
     std::string poses_quality = "fast";  // capture::PosesQuality
     int aabb_scale = 16;
     double min_registered = 0.5;
+    // object
+    double height_m = 0;  // the object's real height in metres; 0: the object frame stays in capture units
     // split, train, eval
     int holdout_every = 8;  // 0: train on every frame, no held-out PSNR
     double train_seconds = 600;

@@ -251,6 +251,28 @@ void print_relight(const nerf::NerfModel& m) {
     }
 }
 
+// The object frame a capture stored (nerf/object_frame.h): where a `volume` cube puts the object.
+void print_object(const nerf::NerfModel& m) {
+    if (!m.object) {
+        fmt::print("object     no object frame (not from `nerfpt capture`): a volume cube stretches the model's box "
+                   "onto itself; place it with a crop (docs/formats.md)\n");
+        return;
+    }
+    const nerf::ObjectFrame& f = *m.object;
+    const char* units = f.metric ? "m" : "capture units";
+    const Vec3 size = f.box_max - f.box_min;
+    fmt::print("object     {:.3g} x {:.3g} x {:.3g} {} (width, depth, height): box x {:.3g}..{:.3g}, y {:.3g}..{:.3g}, "
+               "z {:.3g}..{:.3g} in its frame (origin at the base centre on the supporting plane, +Z up)\n",
+               size.x, size.y, size.z, units, f.box_min.x, f.box_max.x, f.box_min.y, f.box_max.y, f.box_min.z,
+               f.box_max.z);
+    const Mat4& o = f.object_to_world;
+    const Vec3 up = normalize(o.transform_vector(Vec3(0, 0, 1)));
+    fmt::print("  in the training world: base centre {}, up {}, {:.4g} {} per world unit\n",
+               vec(o.transform_point(Vec3(0.0f))), vec(up), f.units_per_world(), f.metric ? "metres" : "units");
+    fmt::print("  a volume cube with this model and an identity node stands it on y = 0 at the origin (Y up){}\n",
+               f.metric ? ", at its real size" : " (no --height was given: capture units, not metres)");
+}
+
 // A model file: what it is, how far it was trained, and where its content lies (to place it in a scene).
 int print_model_info(const std::string& path) {
     const nerf::NerfModel m = nerf::load_model(path);
@@ -306,6 +328,7 @@ int print_model_info(const std::string& path) {
     } else {
         fmt::print("content    no occupied cells\n");
     }
+    print_object(m);
     return 0;
 }
 

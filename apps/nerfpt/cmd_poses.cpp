@@ -143,6 +143,7 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
         summary.cpu_seconds[i] = run.cpu_seconds[i];
     }
     summary.max_num_features = run.max_num_features;
+    summary.model_folder = run.model_folder.string();
     return summary;
 }
 

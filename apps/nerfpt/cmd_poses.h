@@ -36,6 +36,7 @@ struct PosesSummary {
     double cpu_seconds[4] = {0, 0, 0, 0};  // the same steps' CPU time (user + system)
     size_t loop_pairs = 0;                 // revisiting pairs the loop closure matched
     int max_num_features = 0;       // SIFT budget per frame
+    std::string model_folder;       // the COLMAP model transforms.json was written from
 };
 // The stage itself (COLMAP, checks, transforms.json), printing as `nerfpt poses` does.
 PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, InterruptGuard& interrupts);

@@ -46,12 +46,12 @@ NPT_HD NPT_INLINE RelitEvent make_relit_event(const VolumeView& v, const Ray& ra
     const Vec3 d_model = l2m.vector(v.world_to_local.apply_vector(ray.d));
     // Facing in model space is facing in world space: dot(A^T n, d) = dot(n, A d).
     const Vec3 n_model = nerf::relit_facing_normal(s.normal, d_model);
-    Vec3 n_world = apply_transpose(v.world_to_local, nerf::model_to_world_axes(l2m.scale * n_model));
+    Vec3 n_world = apply_transpose(v.world_to_local, l2m.transpose_vector(n_model));
     const float len = length(n_world);
     n_world = len > 0.0f && isfinite(len) ? n_world / len : -ray.d;
     if (dot(n_world, ray.d) > 0.0f) n_world = -n_world;  // rounding at grazing angles
     const Vec3 dp_model = nerf::relit_spawn_point(p_model, n_model, v.nerf.march.min_step) - p_model;
-    const Vec3 dp_world = apply_inverse(v.world_to_local, nerf::model_to_world_axes(dp_model / l2m.scale));
+    const Vec3 dp_world = apply_inverse(v.world_to_local, l2m.inverse_vector(dp_model));
     RelitEvent e;
     e.p = ray.at(t);
     e.origin = e.p + dp_world;

@@ -71,6 +71,16 @@ VolumeDesc parse_volume_desc(const std::string& extras_json, const std::string& 
         else
             throw Error(where + ": extras.volume.shading: expected \"relit\" or \"emissive\"");
     }
+    if (v.contains("placement")) {
+        const auto& pl = v["placement"];
+        const std::string value = pl.is_string() ? pl.get<std::string>() : "";
+        if (value == "object")
+            d.placement = VolumePlacement::Object;
+        else if (value == "box")
+            d.placement = VolumePlacement::Box;
+        else
+            throw Error(where + ": extras.volume.placement: expected \"object\" or \"box\"");
+    }
     if (v.contains("casts_shadows")) {
         if (!v["casts_shadows"].is_boolean())
             throw Error(where + ": extras.volume.casts_shadows: expected true or false");
@@ -91,7 +101,23 @@ void fill_nerf_volume(const nerf::NerfModel& m, const VolumeDesc& desc, Vec3 loc
     v.kind = VolumeKind::Nerf;
     v.nerf.march = m.march_params();
     nerf::CropBox box{v.nerf.march.aabb_min, v.nerf.march.aabb_max};  // the model's box
-    if (desc.has_crop) {
+    if (desc.placement == VolumePlacement::Object && !m.object)
+        throw Error(where + ": extras.volume.placement: \"object\" needs a model that carries its object frame "
+                    "(made by `nerfpt capture`), and " + desc.file + " does not");
+    if (desc.placement == VolumePlacement::Object && desc.has_crop)
+        throw Error(where + ": extras.volume.crop: a crop is for \"placement\": \"box\" (the object frame brings its "
+                    "own box)");
+    const bool object = m.object && !desc.has_crop && desc.placement != VolumePlacement::Box;
+    v.local_min = local_min;
+    v.local_max = local_max;
+    if (object) {
+        const nerf::CropBox obox = nerf::object_model_box(*m.object, m.world_to_model);
+        box.min = vmax(box.min, obox.min);
+        box.max = vmin(box.max, obox.max);
+        if (!(box.max.x > box.min.x && box.max.y > box.min.y && box.max.z > box.min.z))
+            throw Error(where + ": " + desc.file + ": the object's box lies outside the model's box");
+        nerf::object_local_box(*m.object, &v.local_min, &v.local_max);
+    } else if (desc.has_crop) {
         box.min = vmax(box.min, desc.crop.min);
         box.max = vmin(box.max, desc.crop.max);
         if (!(box.max.x > box.min.x && box.max.y > box.min.y && box.max.z > box.min.z))
@@ -102,7 +128,8 @@ void fill_nerf_volume(const nerf::NerfModel& m, const VolumeDesc& desc, Vec3 loc
     v.nerf.occupancy = m.occupancy.view();
     v.nerf.march.aabb_min = box.min;
     v.nerf.march.aabb_max = box.max;
-    v.nerf.local_to_model = nerf::local_to_model(local_min, local_max, box);
+    v.nerf.local_to_model = object ? nerf::object_local_to_model(*m.object, m.world_to_model)
+                                   : nerf::local_to_model(local_min, local_max, box);
     v.nerf.relit = volume_is_relit(desc, m.relightable(), where);
     v.nerf.intrinsic = v.nerf.relit ? m.intrinsic() : nerf::IntrinsicFieldView{};
 }

@@ -20,6 +20,13 @@ namespace npt::media {
 // only), Emissive adds its trained colour as emission. Auto: Relit exactly when the model is relightable.
 enum class VolumeShading : uint8_t { Auto, Relit, Emissive };
 
+// How a NeRF model fills its cube. Box: the crop box (model space) is stretched onto the cube's local box.
+// Object: the model's object frame (nerf/object_frame.h) is the cube's local space turned Y up, in object
+// units (metres for a capture given --height), and the object's box is the volume: the node transform alone
+// places the object, an identity one stands it on y = 0 at the origin. Auto: Object for a model that carries
+// an object frame when no crop is given, else Box.
+enum class VolumePlacement : uint8_t { Auto, Object, Box };
+
 // What a scene says about one volume (glTF node extras `{"volume": {...}}`, or the JSON scene's volume
 // entry).
 struct VolumeDesc {
@@ -32,6 +39,7 @@ struct VolumeDesc {
     bool has_crop = false;
     nerf::CropBox crop;
     VolumeShading shading = VolumeShading::Auto;  // "shading": "relit" | "emissive" (NeRF models only)
+    VolumePlacement placement = VolumePlacement::Auto;  // "placement": "object" | "box" (NeRF models only)
 };
 
 // The shading a volume gets: `desc` for a model that is (or is not) relightable. Throws, naming `where` and the
@@ -41,9 +49,10 @@ bool volume_is_relit(const VolumeDesc& desc, bool relightable, const std::string
 // Parses `extras_json` of a VolumeInstance; `where` names it in errors ("scene.gltf: node 'volume'").
 VolumeDesc parse_volume_desc(const std::string& extras_json, const std::string& where);
 
-// The NeRF parts of `v` (kind, field, occupancy, march, placement, shading) for model `m` in a cube with local
-// box [local_min, local_max]; v points into m, which must outlive it. Throws, naming `where`, for a crop
-// outside the model or "relit" on a model that is not relightable.
+// The NeRF parts of `v` (kind, field, occupancy, march, placement, its local box, shading) for model `m` in a
+// cube with local box [local_min, local_max]; v points into m, which must outlive it. Throws, naming `where`,
+// for a crop outside the model, "relit" on a model that is not relightable, "placement": "object" on a model
+// without an object frame or with a crop.
 void fill_nerf_volume(const nerf::NerfModel& m, const VolumeDesc& desc, Vec3 local_min, Vec3 local_max,
                       const std::string& where, VolumeView& v);
 

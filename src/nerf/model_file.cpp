@@ -269,6 +269,7 @@ struct RawModel {
     std::optional<std::vector<uint8_t>> relight;  // RLIT's payload, decoded once the checksum has vouched for it
     std::optional<std::vector<float>> view_directions;  // 3 per direction
     uint64_t view_count = 0;
+    std::optional<std::string> object;  // OBJF's JSON text
 };
 
 void check_finite(const std::vector<float>& x, const Reader& in, const char* what) {
@@ -374,6 +375,10 @@ RawModel read_sections(Reader& in) {
                 in.read(v->data(), n * 4);
             }
             t.adam.step = raw.training_step;
+        } else if (tag == "OBJF") {
+            std::string text(size_t(length), '\0');
+            in.read(text.data(), text.size());
+            raw.object = std::move(text);
         } else if (tag == "RLIT") {
             raw.relight.emplace(size_t(length));
             in.read(raw.relight->data(), raw.relight->size());
@@ -439,6 +444,16 @@ void save_model(const fs::path& path, const NerfModel& model, bool with_training
         }
     }
 
+    std::string object;
+    if (model.object) {
+        object = object_frame_to_json(*model.object).dump();
+        try {  // what the reader will check
+            (void)object_frame_from_json(json::parse(object), "object frame");
+        } catch (const Error& e) {
+            throw refuse(e.what());
+        }
+    }
+
     const std::string conf = config_to_json(model.config).dump(2);
     AtomicWriter out(path);
     out.write(k_magic, 8);
@@ -473,6 +488,10 @@ void save_model(const fs::path& path, const NerfModel& model, bool with_training
         out.put(uint64_t(total));
         for (const auto* v : {&training->params, &training->adam.m, &training->adam.v, &training->adam.ema})
             out.write(v->data(), 4 * total);
+    }
+    if (model.object) {
+        out.section("OBJF", object.size());
+        out.write(object.data(), object.size());
     }
     if (model.relight) {
         out.section("RLIT", relight.size());
@@ -552,6 +571,9 @@ NerfModel load_model(const fs::path& path) {
         check_finite(t.adam.ema, in, "optimizer state ema");
         model.training = std::move(t);
     }
+    if (raw.object)
+        model.object = object_frame_from_json(parse_json_text(*raw.object, in.name() + ": section 'OBJF'"),
+                                              in.name() + ": section 'OBJF'");
     if (raw.relight)
         model.relight = decode_relight_section(raw.relight->data(), raw.relight->size(), in.name(), model.aabb_scale);
     return model;

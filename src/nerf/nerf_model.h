@@ -13,6 +13,7 @@
 #include "nerf/dataset.h"
 #include "nerf/nerf_config.h"
 #include "nerf/nerf_field.h"
+#include "nerf/object_frame.h"
 #include "nerf/occupancy_grid.h"
 #include "nerf/ray_march.h"
 #include "nerf/relight/relight_model.h"
@@ -44,6 +45,8 @@ struct NerfModel {
     // colour network was trained, which a bake averages its colour over (bake/bake_grid.h). Empty for models
     // written before they were stored (and for imported snapshots).
     std::vector<Vec3> view_directions;
+    // Where the captured object stands (`nerfpt capture`, object_frame.h); absent for other models.
+    std::optional<ObjectFrame> object;
 
     NerfLayout layout() const { return make_layout(config, aabb_scale); }
     NerfFieldView field() const { return {layout(), params.data()}; }

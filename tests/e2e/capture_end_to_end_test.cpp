@@ -4,6 +4,7 @@
 // alignment. Needs ffmpeg and colmap on PATH (scripts/install_deps.sh installs them); skips without them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -51,7 +52,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
 
     const nlohmann::json record = read_json_file(work / "capture.json");
     const nlohmann::json& stages = record.at("stages");
-    for (const char* stage : {"curate", "poses", "split", "train", "eval", "turntable"})
+    for (const char* stage : {"curate", "poses", "object", "split", "train", "eval", "turntable"})
         EXPECT_TRUE(stages.contains(stage)) << "capture.json has no '" << stage << "' stage";
     const int kept = stages["curate"]["kept"].get<int>();  // a window whose best frame is blurry keeps none
     EXPECT_GE(kept, 70);
@@ -65,7 +66,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     const int rerun = run_cli(capture, dir / "rerun.log");
     ASSERT_EQ(rerun, 0) << read_text(dir / "rerun.log");
     const std::string rerun_log = read_text(dir / "rerun.log");
-    for (const char* stage : {"curate", "poses", "split", "train", "eval", "turntable"})
+    for (const char* stage : {"curate", "poses", "object", "split", "train", "eval", "turntable"})
         EXPECT_NE(rerun_log.find(std::string(stage) + ": done in an earlier run"), std::string::npos)
             << rerun_log;
     EXPECT_EQ(fs::last_write_time(work / "model.npt"), model_time);
@@ -92,6 +93,25 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     EXPECT_LT(cmp.rotation_deg.max, 3.0);
     EXPECT_LT(rel_median, 0.01);
     EXPECT_LT(rel_max, 0.05);
+
+    // The object (issue 25): the box (1.2 x 1.0 x 0.8, its base on the floor y = 0, world +Y up) found on its
+    // floor. Targets: up within 2 degrees, the base plane within 1% of the object's height (1.0).
+    const nlohmann::json& obj = stages["object"];
+    ASSERT_TRUE(obj.value("found", false)) << obj.dump();
+    const auto vec = [](const nlohmann::json& j) {
+        return Eigen::Vector3d(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+    };
+    const Eigen::Vector3d up = cmp.similarity.rotation * vec(obj["up"]);
+    const double up_deg = std::acos(std::clamp(up.normalized().y(), -1.0, 1.0)) * 180.0 / 3.14159265358979;
+    const Eigen::Vector3d base = cmp.similarity.apply(vec(obj["base_center"]));
+    const double height = cmp.similarity.scale * obj["height"].get<double>();
+    std::printf("object: up %.2f deg off, base plane %+.4f (of height 1), base centre (%.3f, %.3f), height %.3f\n",
+                up_deg, base.y(), base.x(), base.z(), height);
+    EXPECT_LT(up_deg, 2.0);
+    EXPECT_LT(std::abs(base.y()), 0.01);
+    EXPECT_LT(std::hypot(base.x(), base.z()), 0.05);
+    EXPECT_NEAR(height, 1.0, 0.1);
+    EXPECT_TRUE(nerf::load_model(work / "model.npt").object.has_value());
 
     // Negative controls, so that the limits are known to catch a broken stage: cameras left in COLMAP's
     // OpenCV axes (y and z flipped), and neighbouring frames' poses swapped (a pairing off by one frame in

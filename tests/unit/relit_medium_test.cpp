@@ -180,11 +180,11 @@ TEST(RelitMedium, DenseBallUnderTheSunMatchesTheAnalyticDirectLightAndShadows) {
     f.count = 2;
 
     const nerf::LocalToModel& l2m = v.nerf.local_to_model;
-    // world -> model as a Mat4: local -> model is offset + scale * permutation, model (x, y, z) = local (y, z, x).
-    Mat4 perm;
-    perm.m = {{{0, 1, 0, 0}, {0, 0, 1, 0}, {1, 0, 0, 0}, {0, 0, 0, 1}}};
-    const Mat4 world_to_model_mat = Mat4::translation(l2m.offset.x, l2m.offset.y, l2m.offset.z) *
-                                    Mat4::scale(l2m.scale.x, l2m.scale.y, l2m.scale.z) * perm * world_to_model;
+    // world -> model as a Mat4: local -> model is L local + offset.
+    Mat4 l2m_mat;
+    for (int r = 0; r < 3; ++r)
+        l2m_mat.m[size_t(r)] = {l2m.row[r].x, l2m.row[r].y, l2m.row[r].z, l2m.offset[r]};
+    const Mat4 world_to_model_mat = l2m_mat * world_to_model;
     const Ellipsoid big{world_to_model_mat, f.centre[0], f.radius[0]};
     const Ellipsoid blocker{world_to_model_mat, f.centre[1], f.radius[1]};
     // How many of five sun rays (from x and from x moved 0.01 sideways four ways) the blocker stops: 5 is the
