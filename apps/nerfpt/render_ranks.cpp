@@ -33,16 +33,19 @@ void agree_or_stop(dist::MpiWorld& world, const std::string& error = {}) {
 int render_still_ranks(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts,
                        dist::MpiWorld& world) {
     if (args.overwrite || args.fps > 0 || args.task_index >= 0 || args.task_count >= 0)
-        throw Error("--overwrite, --fps, --task-index and --task-count are for sequences (with --frames FIRST-LAST)");
+        throw Error(
+            "--overwrite, --fps, --task-index and --task-count are for sequences (with --frames FIRST-LAST)");
     if (args.denoise)
-        throw Error("--denoise: not available when a still's samples are split over MPI ranks (run one process)");
+        throw Error(
+            "--denoise: not available when a still's samples are split over MPI ranks (run one process)");
     const bool leader = world.rank() == 0;
     const fs::path out_exr = args.output;
     fs::path out_png = out_exr;
     out_png.replace_extension(".png");
     check_output(out_exr);
     const uint32_t aov_mask = args.aovs.empty() ? 0u : render::parse_aov_list(args.aovs);
-    const std::vector<AovFile> aov_files = args.aov_files ? aov_file_paths(out_exr, aov_mask) : std::vector<AovFile>{};
+    const std::vector<AovFile> aov_files =
+        args.aov_files ? aov_file_paths(out_exr, aov_mask) : std::vector<AovFile>{};
 
     render::RenderOptions options;
     if (!args.res.empty()) parse_resolution(args.res, &options.width, &options.height);
@@ -55,7 +58,8 @@ int render_still_ranks(const RenderArgs& args, const GlobalSettings& global, Int
     load.camera_name = args.camera;
     load.animation_name = args.animation;
     const scene::Scene scene = scene::load_scene(args.scene, load);
-    for (const fs::path& out : {out_exr, out_png}) refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
+    for (const fs::path& out : {out_exr, out_png})
+        refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
     for (const AovFile& f : aov_files) refuse_overwriting_inputs(f.path, "--aov-files", scene_inputs(scene));
     options.seed = args.seed_given ? args.seed : scene.settings.seed;
     std::string note;
@@ -65,9 +69,10 @@ int render_still_ranks(const RenderArgs& args, const GlobalSettings& global, Int
     const int n = world.size(), r = world.rank();
     const uint32_t begin = uint32_t(uint64_t(resolved.spp) * uint64_t(r) / uint64_t(n));
     const uint32_t end = uint32_t(uint64_t(resolved.spp) * uint64_t(r + 1) / uint64_t(n));
-    spdlog::info("rendering {}x{}, {} spp over {} MPI ranks (samples split), max depth {}, seed {}, backend {}{}{}",
-                 resolved.width, resolved.height, resolved.spp, n, resolved.max_depth, resolved.seed, resolved.backend,
-                 resolved.transparent ? ", transparent" : "", args.aovs.empty() ? "" : ", AOVs " + args.aovs);
+    spdlog::info(
+        "rendering {}x{}, {} spp over {} MPI ranks (samples split), max depth {}, seed {}, backend {}{}{}",
+        resolved.width, resolved.height, resolved.spp, n, resolved.max_depth, resolved.seed, resolved.backend,
+        resolved.transparent ? ", transparent" : "", args.aovs.empty() ? "" : ", AOVs " + args.aovs);
 
     ProgressSettings ps;
     ps.style = progress_style(stream_is_tty(stderr), global.quiet || !leader);
@@ -80,8 +85,9 @@ int render_still_ranks(const RenderArgs& args, const GlobalSettings& global, Int
     film.first_hits = resolved.transparent || aov_mask != 0;
     if (begin < end) {
         const auto renderer = render::prepare_renderer(scene, resolved);
-        film = renderer->render_partial(resolved, begin, end,
-                                        [&progress](uint64_t done, uint64_t total) { progress.update(done, total); });
+        film = renderer->render_partial(resolved, begin, end, [&progress](uint64_t done, uint64_t total) {
+            progress.update(done, total);
+        });
     }
     progress.finish();
     const double render_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -99,7 +105,8 @@ int render_still_ranks(const RenderArgs& args, const GlobalSettings& global, Int
     bytes = {};
     render::AovImages aovs;
     const Image image = render::resolve_partial(film, resolved.transparent ? 4 : 3, aov_mask, &aovs);
-    if (film.dropped > 0) spdlog::warn("render: {} samples were NaN or infinite and were dropped", film.dropped);
+    if (film.dropped > 0)
+        spdlog::warn("render: {} samples were NaN or infinite and were dropped", film.dropped);
     {
         auto no_interrupt = interrupts.hold();  // every file complete, or an interrupt waits for them
         write_exr_layers(out_exr, image, aov_layers(aovs, aov_mask));
@@ -112,9 +119,10 @@ int render_still_ranks(const RenderArgs& args, const GlobalSettings& global, Int
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     fmt::print("wrote {}\nwrote {}\n", out_exr.string(), out_png.string());
     for (const AovFile& f : aov_files) fmt::print("wrote {}\n", f.path.string());
-    fmt::print("rendered {}x{} at {} spp over {} ranks in {} (rank 0's samples: {}; {} samples/s)\n", resolved.width,
-               resolved.height, resolved.spp, n, format_seconds(seconds), format_seconds(render_s),
-               format_count(seconds > 0 ? double(resolved.width) * resolved.height * resolved.spp / seconds : 0.0));
+    fmt::print(
+        "rendered {}x{} at {} spp over {} ranks in {} (rank 0's samples: {}; {} samples/s)\n", resolved.width,
+        resolved.height, resolved.spp, n, format_seconds(seconds), format_seconds(render_s),
+        format_count(seconds > 0 ? double(resolved.width) * resolved.height * resolved.spp / seconds : 0.0));
     return 0;
 }
 
@@ -122,7 +130,8 @@ int render_still_ranks(const RenderArgs& args, const GlobalSettings& global, Int
 
 int run_render_ranks(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts,
                      dist::MpiWorld& world) {
-    if (world.rank() != 0 && !global.verbose) spdlog::set_level(spdlog::level::warn);  // rank 0 speaks for the job
+    if (world.rank() != 0 && !global.verbose)
+        spdlog::set_level(spdlog::level::warn);  // rank 0 speaks for the job
     if (!world.gpu_note().empty()) spdlog::debug("{}: {}", world.name(), world.gpu_note());
     int rc = 0;
     try {

@@ -27,7 +27,8 @@ std::optional<std::string> cuda_devices_for_rank(int local_rank, const char* vis
         size_t begin = 0;
         for (;;) {
             const size_t comma = s.find(',', begin);
-            const std::string id = s.substr(begin, comma == std::string::npos ? std::string::npos : comma - begin);
+            const std::string id =
+                s.substr(begin, comma == std::string::npos ? std::string::npos : comma - begin);
             if (!id.empty()) ids.push_back(id);
             if (comma == std::string::npos) break;
             begin = comma + 1;
@@ -52,7 +53,8 @@ int nvidia_gpus_on_node() {
 }
 
 int launcher_local_rank(const char* (*getenv)(const char*)) {
-    for (const char* name : {"OMPI_COMM_WORLD_LOCAL_RANK", "MPI_LOCALRANKID", "MV2_COMM_WORLD_LOCAL_RANK", "SLURM_LOCALID"})
+    for (const char* name :
+         {"OMPI_COMM_WORLD_LOCAL_RANK", "MPI_LOCALRANKID", "MV2_COMM_WORLD_LOCAL_RANK", "SLURM_LOCALID"})
         if (const auto v = whole_number(getenv(name))) return *v;
     return -1;
 }

@@ -59,7 +59,8 @@ MpiWorld::MpiWorld() : m_host(host_name()) {
 #if NERFPT_HAVE_MPI
     int provided = 0;
     if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
-        throw Error("MPI_Init failed (started by an MPI launcher as one of " + std::to_string(launched) + " processes)");
+        throw Error("MPI_Init failed (started by an MPI launcher as one of " + std::to_string(launched) +
+                    " processes)");
     m_started = true;
     MPI_Comm_rank(MPI_COMM_WORLD, &m_rank);
     MPI_Comm_size(MPI_COMM_WORLD, &m_size);
@@ -69,9 +70,10 @@ MpiWorld::MpiWorld() : m_host(host_name()) {
     MPI_Comm_free(&node);
 #else
     if (launched > 1)
-        throw Error("started by an MPI launcher as one of " + std::to_string(launched) +
-                    " processes, but this nerfpt was built without MPI (each process would render the whole job); "
-                    "build it with Open MPI (libopenmpi-dev, cmake -DNERFPT_MPI=ON) or run one process");
+        throw Error(
+            "started by an MPI launcher as one of " + std::to_string(launched) +
+            " processes, but this nerfpt was built without MPI (each process would render the whole job); "
+            "build it with Open MPI (libopenmpi-dev, cmake -DNERFPT_MPI=ON) or run one process");
 #endif
 }
 
@@ -92,7 +94,8 @@ void send_bytes(const std::vector<char>& bytes, int dest) {
     const uint64_t n = bytes.size();
     MPI_Send(&n, 1, MPI_UINT64_T, dest, k_tag_size, MPI_COMM_WORLD);
     for (size_t off = 0; off < n; off += k_chunk)
-        MPI_Send(bytes.data() + off, int(std::min(k_chunk, n - off)), MPI_BYTE, dest, k_tag_bytes, MPI_COMM_WORLD);
+        MPI_Send(bytes.data() + off, int(std::min(k_chunk, n - off)), MPI_BYTE, dest, k_tag_bytes,
+                 MPI_COMM_WORLD);
 }
 
 std::vector<char> recv_bytes(int source) {
@@ -117,7 +120,8 @@ std::optional<std::string> MpiWorld::agree(const std::string& error) {
     std::vector<int> offsets(static_cast<size_t>(m_size), 0);
     for (int r = 1; r < m_size; ++r) offsets[size_t(r)] = offsets[size_t(r - 1)] + lengths[size_t(r - 1)];
     std::string all(size_t(offsets.back() + lengths.back()), '\0');
-    MPI_Allgatherv(mine.data(), length, MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR, MPI_COMM_WORLD);
+    MPI_Allgatherv(mine.data(), length, MPI_CHAR, all.data(), lengths.data(), offsets.data(), MPI_CHAR,
+                   MPI_COMM_WORLD);
     int first = -1, failed = 0;
     for (int r = 0; r < m_size; ++r)
         if (lengths[size_t(r)] > 0) {
@@ -130,8 +134,9 @@ std::optional<std::string> MpiWorld::agree(const std::string& error) {
     m_host.copy(host, sizeof host - 1);
     std::vector<char> hosts(size_t(m_size) * sizeof host);
     MPI_Allgather(host, sizeof host, MPI_CHAR, hosts.data(), sizeof host, MPI_CHAR, MPI_COMM_WORLD);
-    std::string line = fmt::format("rank {} of {} on {}: {}", first, m_size, std::string(&hosts[size_t(first) * sizeof host]),
-                                   all.substr(size_t(offsets[size_t(first)]), size_t(lengths[size_t(first)])));
+    std::string line = fmt::format(
+        "rank {} of {} on {}: {}", first, m_size, std::string(&hosts[size_t(first) * sizeof host]),
+        all.substr(size_t(offsets[size_t(first)]), size_t(lengths[size_t(first)])));
     if (failed > 1) line += fmt::format(" ({} other rank{} failed too)", failed - 1, failed > 2 ? "s" : "");
     return line;
 }
@@ -145,7 +150,8 @@ void MpiWorld::broadcast(std::vector<int>& values) {
 }
 
 void MpiWorld::reduce_in_rank_order(
-    std::vector<char>& bytes, const std::function<void(std::vector<char>& left, std::vector<char>&& right)>& merge) {
+    std::vector<char>& bytes,
+    const std::function<void(std::vector<char>& left, std::vector<char>&& right)>& merge) {
     if (!m_started) return;
     for (int step = 1; step < m_size; step *= 2) {
         if (m_rank % (2 * step) == step) {  // this rank's part is complete: to the rank on its left, and done
@@ -158,7 +164,8 @@ void MpiWorld::reduce_in_rank_order(
                 merge(bytes, recv_bytes(m_rank + step));
             } catch (const std::exception& e) {
                 // The ranks on the right wait in sends: end the whole job rather than hang it.
-                fmt::print(stderr, "nerfpt: error: {}: merging rank {}'s result: {}\n", name(), m_rank + step, e.what());
+                fmt::print(stderr, "nerfpt: error: {}: merging rank {}'s result: {}\n", name(), m_rank + step,
+                           e.what());
                 MPI_Abort(MPI_COMM_WORLD, 1);
             }
         }

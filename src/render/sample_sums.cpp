@@ -15,7 +15,8 @@ std::vector<SampleBlock> aligned_blocks(uint32_t begin, uint32_t end) {
     std::vector<SampleBlock> out;
     uint32_t p = begin;
     while (p < end) {
-        uint32_t size = p == 0 ? 0x80000000u : (p & (~p + 1u));  // the largest power of two p is a multiple of
+        uint32_t size =
+            p == 0 ? 0x80000000u : (p & (~p + 1u));  // the largest power of two p is a multiple of
         while (size > end - p) size >>= 1;
         out.push_back({p, size});
         p += size;
@@ -23,8 +24,8 @@ std::vector<SampleBlock> aligned_blocks(uint32_t begin, uint32_t end) {
     return out;
 }
 
-void resolve_pixel(const PixelSums& sums, uint32_t spp, float* px, int channels, uint32_t aov_mask, AovImages* aovs,
-                   size_t pixel) {
+void resolve_pixel(const PixelSums& sums, uint32_t spp, float* px, int channels, uint32_t aov_mask,
+                   AovImages* aovs, size_t pixel) {
     px[0] = sums.radiance.x / float(spp);
     px[1] = sums.radiance.y / float(spp);
     px[2] = sums.radiance.z / float(spp);
@@ -43,7 +44,8 @@ bool merge_top(std::vector<PartialFilm::Plane>& planes) {
     if (planes.size() < 2) return false;
     PartialFilm::Plane& a = planes[planes.size() - 2];
     PartialFilm::Plane& b = planes.back();
-    if (a.block.size != b.block.size || a.block.begin % (2 * a.block.size) != 0 || a.block.end() != b.block.begin)
+    if (a.block.size != b.block.size || a.block.begin % (2 * a.block.size) != 0 ||
+        a.block.end() != b.block.begin)
         return false;
     for (size_t i = 0; i < a.sums.size(); ++i) add_to(a.sums[i], b.sums[i]);
     a.block.size *= 2;
@@ -133,7 +135,8 @@ std::vector<char> partial_to_bytes(const PartialFilm& film) {
             std::memcpy(p, plane.sums.data(), pixels * sizeof(PixelSums));
             p += pixels * sizeof(PixelSums);
         } else {
-            for (size_t i = 0; i < pixels; ++i, p += sizeof(Rgb)) std::memcpy(p, &plane.sums[i].radiance, sizeof(Rgb));
+            for (size_t i = 0; i < pixels; ++i, p += sizeof(Rgb))
+                std::memcpy(p, &plane.sums[i].radiance, sizeof(Rgb));
         }
     }
     return out;
@@ -145,11 +148,13 @@ PartialFilm partial_from_bytes(const std::vector<char>& bytes) {
     if (bytes.size() < sizeof h) throw bad("shorter than its header");
     std::memcpy(&h, bytes.data(), sizeof h);
     if (std::memcmp(h.magic, k_magic, sizeof k_magic) != 0) throw bad("not a partial film");
-    if (h.width < 1 || h.height < 1 || h.spp < 1 || h.first_hits > 1 || h.planes > 64) throw bad("bad header");
+    if (h.width < 1 || h.height < 1 || h.spp < 1 || h.first_hits > 1 || h.planes > 64)
+        throw bad("bad header");
     const size_t pixels = size_t(h.width) * size_t(h.height);
     const size_t per_pixel = h.first_hits ? sizeof(PixelSums) : sizeof(Rgb);
     const size_t plane_bytes = 2 * sizeof(uint32_t) + pixels * per_pixel;
-    if (bytes.size() != sizeof h + size_t(h.planes) * plane_bytes) throw bad("its size does not match its header");
+    if (bytes.size() != sizeof h + size_t(h.planes) * plane_bytes)
+        throw bad("its size does not match its header");
     PartialFilm film;
     film.width = h.width;
     film.height = h.height;
@@ -163,15 +168,18 @@ PartialFilm partial_from_bytes(const std::vector<char>& bytes) {
         std::memcpy(&plane.block.size, p + sizeof(uint32_t), sizeof(uint32_t));
         p += 2 * sizeof(uint32_t);
         const SampleBlock b = plane.block;
-        if (b.size == 0 || (b.size & (b.size - 1)) != 0 || b.begin % b.size != 0 || uint64_t(b.begin) + b.size > h.spp ||
+        if (b.size == 0 || (b.size & (b.size - 1)) != 0 || b.begin % b.size != 0 ||
+            uint64_t(b.begin) + b.size > h.spp ||
             (!film.planes.empty() && film.planes.back().block.end() != b.begin))
-            throw bad("block " + std::to_string(b.begin) + "+" + std::to_string(b.size) + " is not an aligned block in order");
+            throw bad("block " + std::to_string(b.begin) + "+" + std::to_string(b.size) +
+                      " is not an aligned block in order");
         plane.sums.resize(pixels);
         if (film.first_hits) {
             std::memcpy(plane.sums.data(), p, pixels * sizeof(PixelSums));
             p += pixels * sizeof(PixelSums);
         } else {
-            for (size_t i = 0; i < pixels; ++i, p += sizeof(Rgb)) std::memcpy(&plane.sums[i].radiance, p, sizeof(Rgb));
+            for (size_t i = 0; i < pixels; ++i, p += sizeof(Rgb))
+                std::memcpy(&plane.sums[i].radiance, p, sizeof(Rgb));
         }
         film.planes.push_back(std::move(plane));
     }

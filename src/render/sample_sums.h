@@ -1,8 +1,8 @@
 // How a pixel's samples are added up, so that an image split over processes by sample index (MPI ranks, each
-// with its own range of samples) is bitwise the image one process makes. Float addition is not associative, so
-// the grouping is fixed by the sample indices alone, never by who rendered them: samples are added in a
-// pairwise tree over aligned power-of-two blocks ([0,1) [1,2) -> [0,2), [0,2) [2,4) -> [0,4), ...), the tree a
-// binary counter builds; the blocks of the whole range (the binary digits of spp, largest first) are then
+// with its own range of samples) is bitwise the image one process makes. Float addition is not associative,
+// so the grouping is fixed by the sample indices alone, never by who rendered them: samples are added in a
+// pairwise tree over aligned power-of-two blocks ([0,1) [1,2) -> [0,2), [0,2) [2,4) -> [0,4), ...), the tree
+// a binary counter builds; the blocks of the whole range (the binary digits of spp, largest first) are then
 // added left to right. A process with the samples [begin, end) keeps the maximal aligned blocks inside its
 // range (at most 2 log2(spp) of them); adding neighbours' lists merges sibling blocks into their parents, so
 // the reduction of all ranges in sample order rebuilds exactly the one-process tree, for any number of
@@ -61,15 +61,15 @@ PixelSums sum_block(SampleBlock b, const Leaf& leaf) {
 // The pixel's value from the sums of all `spp` samples: radiance / spp, alpha (channels 4) 1 - escaped / spp,
 // and the AOVs of `aov_mask` into aovs at `pixel`. The one place both the one-process and the split renders
 // turn sums into a film.
-void resolve_pixel(const PixelSums& sums, uint32_t spp, float* px, int channels, uint32_t aov_mask, AovImages* aovs,
-                   size_t pixel);
+void resolve_pixel(const PixelSums& sums, uint32_t spp, float* px, int channels, uint32_t aov_mask,
+                   AovImages* aovs, size_t pixel);
 
 // The sums of one process's samples [begin, end) of a width x height film: one plane per aligned block.
 struct PartialFilm {
     int width = 0, height = 0;
-    uint32_t spp = 0;          // the whole render's samples per pixel
-    bool first_hits = false;   // the planes' first-hit sums are meaningful (transparent or AOVs)
-    uint64_t dropped = 0;      // NaN or infinite samples left out
+    uint32_t spp = 0;         // the whole render's samples per pixel
+    bool first_hits = false;  // the planes' first-hit sums are meaningful (transparent or AOVs)
+    uint64_t dropped = 0;     // NaN or infinite samples left out
     struct Plane {
         SampleBlock block;
         std::vector<PixelSums> sums;  // width * height
@@ -79,8 +79,8 @@ struct PartialFilm {
     uint32_t end() const { return planes.empty() ? 0 : planes.back().block.end(); }
 };
 
-// `right` (the samples just after left's) appended to `left`, sibling blocks merged into their parents (left +
-// right, pixel by pixel). Throws npt::Error when the two are not neighbours of the same film.
+// `right` (the samples just after left's) appended to `left`, sibling blocks merged into their parents (left
+// + right, pixel by pixel). Throws npt::Error when the two are not neighbours of the same film.
 void merge_partial(PartialFilm& left, PartialFilm&& right);
 
 // The image (3 channels, or 4 with `channels` 4) and AOVs of a film whose planes cover [0, spp): throws

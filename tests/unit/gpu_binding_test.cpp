@@ -1,11 +1,12 @@
 // One GPU per MPI rank (dist/gpu_binding.h) and how nerfpt tells it was started by an MPI launcher
 // (dist/mpi_world.h): pure functions of the environment.
+#include "dist/gpu_binding.h"
+
 #include <gtest/gtest.h>
 
 #include <map>
 #include <string>
 
-#include "dist/gpu_binding.h"
 #include "dist/mpi_world.h"
 
 namespace npt::dist {
@@ -21,13 +22,13 @@ TEST(GpuBinding, LocalRankTakesItsGpu) {
     EXPECT_EQ(cuda_devices_for_rank(0, nullptr, 4), "0");
     EXPECT_EQ(cuda_devices_for_rank(3, nullptr, 4), "3");
     EXPECT_EQ(cuda_devices_for_rank(5, nullptr, 4), "1");  // more ranks than GPUs: shared in turn
-    EXPECT_EQ(cuda_devices_for_rank(1, "", 2), "1");        // empty: as if unset
-    EXPECT_EQ(cuda_devices_for_rank(1, "4,6,7", 8), "6");    // a scheduler's list: its entries
+    EXPECT_EQ(cuda_devices_for_rank(1, "", 2), "1");       // empty: as if unset
+    EXPECT_EQ(cuda_devices_for_rank(1, "4,6,7", 8), "6");  // a scheduler's list: its entries
     EXPECT_EQ(cuda_devices_for_rank(4, "4,6,7", 8), "6");
-    EXPECT_FALSE(cuda_devices_for_rank(1, "5", 8));          // one GPU chosen already
-    EXPECT_FALSE(cuda_devices_for_rank(1, nullptr, 1));     // nothing to choose
+    EXPECT_FALSE(cuda_devices_for_rank(1, "5", 8));      // one GPU chosen already
+    EXPECT_FALSE(cuda_devices_for_rank(1, nullptr, 1));  // nothing to choose
     EXPECT_FALSE(cuda_devices_for_rank(1, nullptr, 0));
-    EXPECT_FALSE(cuda_devices_for_rank(-1, nullptr, 4));    // no local rank known
+    EXPECT_FALSE(cuda_devices_for_rank(-1, nullptr, 4));  // no local rank known
 }
 
 TEST(GpuBinding, LauncherEnvironment) {

@@ -1,6 +1,9 @@
-// The fixed grouping of a pixel's samples (render/sample_sums.h): any split of [0, spp) into contiguous ranges,
-// each summed alone and merged in sample order, gives bitwise the one-process sum; the CPU renderer's shares of a
-// real render resolve to its own image byte for byte; the message format round-trips and refuses bad input.
+// The fixed grouping of a pixel's samples (render/sample_sums.h): any split of [0, spp) into contiguous
+// ranges, each summed alone and merged in sample order, gives bitwise the one-process sum; the CPU renderer's
+// shares of a real render resolve to its own image byte for byte; the message format round-trips and refuses
+// bad input.
+#include "render/sample_sums.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -8,7 +11,6 @@
 
 #include "core/error.h"
 #include "render/cpu/cpu_renderer.h"
-#include "render/sample_sums.h"
 #include "scene/scene.h"
 #include "test_support.h"
 
@@ -48,7 +50,8 @@ PartialFilm partial(int pixels, uint32_t spp, uint32_t begin, uint32_t end, cons
     f.first_hits = true;
     for (const SampleBlock& b : aligned_blocks(begin, end)) {
         PartialFilm::Plane plane{b, std::vector<PixelSums>(size_t(pixels))};
-        for (int i = 0; i < pixels; ++i) plane.sums[size_t(i)] = sum_block(b, [&](uint32_t s) { return leaf(i, s); });
+        for (int i = 0; i < pixels; ++i)
+            plane.sums[size_t(i)] = sum_block(b, [&](uint32_t s) { return leaf(i, s); });
         f.planes.push_back(std::move(plane));
     }
     f.dropped = end - begin;
@@ -98,16 +101,21 @@ TEST(SampleSums, AnySplitMergedInOrderIsBitwiseTheOneProcessSum) {
                 std::sort(cuts.begin(), cuts.end());
                 // Merged in rank order along a binomial tree, as MpiWorld::reduce_in_rank_order does.
                 std::vector<PartialFilm> films;
-                for (int r = 0; r < ranks; ++r) films.push_back(partial(pixels, spp, cuts[size_t(r)], cuts[size_t(r) + 1], leaf));
+                for (int r = 0; r < ranks; ++r)
+                    films.push_back(partial(pixels, spp, cuts[size_t(r)], cuts[size_t(r) + 1], leaf));
                 for (int step = 1; step < ranks; step *= 2)
-                    for (int r = 0; r + step < ranks; r += 2 * step) merge_partial(films[size_t(r)], std::move(films[size_t(r + step)]));
+                    for (int r = 0; r + step < ranks; r += 2 * step)
+                        merge_partial(films[size_t(r)], std::move(films[size_t(r + step)]));
                 AovImages aovs;
                 const Image split = resolve_partial(films[0], 4, mask, &aovs);
-                ASSERT_EQ(0, std::memcmp(split.pixels.data(), one.pixels.data(), one.pixels.size() * sizeof(float)))
+                ASSERT_EQ(
+                    0, std::memcmp(split.pixels.data(), one.pixels.data(), one.pixels.size() * sizeof(float)))
                     << spp << " spp over " << ranks << " ranges, trial " << trial;
-                for (auto [a, b] : {std::pair{&aovs.albedo, &one_aovs.albedo}, {&aovs.normal, &one_aovs.normal},
+                for (auto [a, b] : {std::pair{&aovs.albedo, &one_aovs.albedo},
+                                    {&aovs.normal, &one_aovs.normal},
                                     {&aovs.depth, &one_aovs.depth}})
-                    ASSERT_EQ(0, std::memcmp(a->pixels.data(), b->pixels.data(), a->pixels.size() * sizeof(float)));
+                    ASSERT_EQ(
+                        0, std::memcmp(a->pixels.data(), b->pixels.data(), a->pixels.size() * sizeof(float)));
                 EXPECT_EQ(films[0].dropped, spp);
             }
         }
@@ -122,7 +130,8 @@ TEST(SampleSums, MergeAndResolveRefuseGaps) {
         return v;
     };
     PartialFilm a = partial(2, 10, 0, 4, leaf);
-    test::expect_error_message([&] { merge_partial(a, partial(2, 10, 5, 10, leaf)); }, {"neighbouring", "5..10"});
+    test::expect_error_message([&] { merge_partial(a, partial(2, 10, 5, 10, leaf)); },
+                               {"neighbouring", "5..10"});
     test::expect_error_message([&] { merge_partial(a, partial(3, 10, 4, 10, leaf)); }, {"neighbouring"});
     AovImages none;
     test::expect_error_message([&] { resolve_partial(a, 3, 0, &none); }, {"0..4 of 10"});
@@ -148,15 +157,17 @@ TEST(SampleSums, BytesRoundTripAndBadMessagesAreRefused) {
             EXPECT_EQ(back.planes[p].block, f.planes[p].block);
             for (size_t i = 0; i < 3; ++i) {
                 EXPECT_EQ(back.planes[p].sums[i].radiance.x, f.planes[p].sums[i].radiance.x);
-                EXPECT_EQ(back.planes[p].sums[i].first.distance, first_hits ? f.planes[p].sums[i].first.distance : 0.0f);
+                EXPECT_EQ(back.planes[p].sums[i].first.distance,
+                          first_hits ? f.planes[p].sums[i].first.distance : 0.0f);
             }
         }
     }
     const std::vector<char> good = partial_to_bytes(partial(3, 20, 3, 17, leaf));
     std::vector<char> cut(good.begin(), good.end() - 1);
     test::expect_error_message([&] { partial_from_bytes(cut); }, {"partial film", "size"});
-    test::expect_error_message([&] { partial_from_bytes(std::vector<char>(good.begin(), good.begin() + 10)); },
-                               {"partial film", "header"});
+    test::expect_error_message(
+        [&] { partial_from_bytes(std::vector<char>(good.begin(), good.begin() + 10)); },
+        {"partial film", "header"});
     std::vector<char> magic = good;
     magic[0] = 'X';
     test::expect_error_message([&] { partial_from_bytes(magic); }, {"not a partial film"});
@@ -188,8 +199,10 @@ TEST(SampleSums, CpuRenderersSharesResolveToItsImage) {
     const Image split = resolve_partial(merged, 4, resolved.aovs, &split_aovs);
     ASSERT_EQ(split.pixels.size(), one.pixels.size());
     EXPECT_EQ(0, std::memcmp(split.pixels.data(), one.pixels.data(), one.pixels.size() * sizeof(float)));
-    EXPECT_EQ(0, std::memcmp(split_aovs.depth.pixels.data(), aovs.depth.pixels.data(), aovs.depth.pixels.size() * sizeof(float)));
-    EXPECT_EQ(0, std::memcmp(split_aovs.albedo.pixels.data(), aovs.albedo.pixels.data(), aovs.albedo.pixels.size() * sizeof(float)));
+    EXPECT_EQ(0, std::memcmp(split_aovs.depth.pixels.data(), aovs.depth.pixels.data(),
+                             aovs.depth.pixels.size() * sizeof(float)));
+    EXPECT_EQ(0, std::memcmp(split_aovs.albedo.pixels.data(), aovs.albedo.pixels.data(),
+                             aovs.albedo.pixels.size() * sizeof(float)));
     test::expect_error_message([&] { renderer.render_partial(resolved, 5, 12); }, {"5..12", "11"});
 }
 
