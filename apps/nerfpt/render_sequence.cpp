@@ -125,10 +125,16 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
     ProgressSettings ps;
     ps.style = progress_style(stream_is_tty(stderr), global.quiet);
     const auto t_shot = std::chrono::steady_clock::now();
+    const auto since = [](std::chrono::steady_clock::time_point t) {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    };
+    double pose_s = 0.0, render_s = 0.0;  // the shot's time in posing + updating, and in rendering
     size_t done = 0;
     for (int f : todo) {
         const double time = scene::frame_time(f, fps);
+        const auto t_pose = std::chrono::steady_clock::now();
         renderer->update(scene::pose_scene(scene, time));
+        pose_s += since(t_pose);
         render::RenderOptions frame_options = resolved;
         frame_options.seed = dist::frame_seed(seed, f);
         const fs::path exr = dist::frame_path(pattern, f);
@@ -140,6 +146,7 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
         const Image image = renderer->render(
             frame_options, [&progress](uint64_t d, uint64_t total) { progress.update(d, total); }, nullptr, &aovs);
         progress.finish();
+        render_s += since(t0);
         const ExrMetadata meta =
             frame_metadata(render::make_camera_view(scene, resolved.width, resolved.height), f, time, fps, frame_options.seed);
         {
@@ -164,8 +171,13 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
                        format_seconds(frame_s), task_text, done + already, frames.size(), format_seconds(left_s));
         std::fflush(stdout);
     }
-    fmt::print("{}rendered {} frames in {}\n", sharing.rank_text, done,
-               format_seconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - t_shot).count()));
+    const double shot_s = since(t_shot);
+    fmt::print("{}rendered {} frames in {}\n", sharing.rank_text, done, format_seconds(shot_s));
+    // Where a frame's time goes (the shot benchmark, docs/benchmarks.md): rendering against posing the scene and
+    // writing the files.
+    spdlog::info("{}per frame: {:.2f} ms rendering, {:.2f} ms posing and updating, {:.2f} ms writing and the rest",
+                 sharing.rank_text, 1e3 * render_s / double(done), 1e3 * pose_s / double(done),
+                 1e3 * (shot_s - render_s - pose_s) / double(done));
     return 0;
 }
 
