@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # nerfpt render under mpirun (registered when nerfpt is built with MPI), with the checked-in animated scene:
 #  - a still's samples split over 2 and 3 ranks (an odd spp, alpha and AOVs) is byte for byte the one-process EXR;
-#  - a shot's frames split over 2 ranks are byte for byte the one-process frames;
+#  - a shot's frames split over 2 ranks (examples/farm/slurm_mpi.sh's command) are byte for byte the one-process
+#    frames;
 #  - an error on every rank is one line, naming a rank;
 #  - a rank killed (SIGKILL) mid-shot fails the job naming it, and the rerun renders only the missing frames
 #    (spread over both ranks), every frame still the one-process frame.
@@ -37,7 +38,10 @@ done
 shot=(render "$scene" --backend cpu --threads 1 --spp 4 --res 32x24 --frames 1-6)
 mkdir -p "$tmp/one" "$tmp/two"
 "$nerfpt" "${shot[@]}" -o "$tmp/one/shot.####.exr" -q >"$tmp/one.log" 2>&1 || fail "one process: $(cat "$tmp/one.log")"
-mpi 2 "${shot[@]}" -o "$tmp/two/shot.####.exr" >"$tmp/two.log" 2>&1 || fail "2 ranks: $(cat "$tmp/two.log")"
+# The 2 ranks through examples/farm/slurm_mpi.sh, as sbatch would run it (SLURM_NTASKS=2, one thread a rank).
+env SLURM_NTASKS=2 SLURM_CPUS_PER_TASK=1 MPIRUN_ARGS=--oversubscribe NERFPT="$nerfpt" SCENE="$scene" \
+    OUT="$tmp/two/shot.####.exr" FRAMES=1-6 RENDER_ARGS="--backend cpu --spp 4 --res 32x24" PATH="$(dirname "$mpiexec"):$PATH" \
+    timeout 120 bash "$root/examples/farm/slurm_mpi.sh" >"$tmp/two.log" 2>&1 || fail "2 ranks: $(cat "$tmp/two.log")"
 for f in 0001 0002 0003 0004 0005 0006; do
     cmp -s "$tmp/one/shot.$f.exr" "$tmp/two/shot.$f.exr" || fail "frame $f over 2 ranks differs from one process's"
 done
