@@ -70,6 +70,7 @@ pack)
     rm -rf .gpu/nerf_demo && mkdir -p .gpu/nerf_demo
     python3 scripts/make_nerf_demo_scene.py .gpu/nerf_demo/scene.gltf >/dev/null
     python3 scripts/make_nerf_demo_scene.py .gpu/nerf_demo/scene_baked.gltf lego_256.vdb >/dev/null
+    python3 scripts/make_nerf_demo_shot.py .gpu/nerf_demo/scene.gltf .gpu/nerf_demo/shot.gltf  # bench/shot_gpu.sh
     src=${NERFPT_SHARED_DATA:-../shared/data}/nerf_synthetic/lego
     if [[ -d $src ]]; then
         dst=.gpu/nerf_synthetic/lego

@@ -16,6 +16,7 @@ packages=(
     python3
     ffmpeg colmap  # nerfpt curate / poses / capture drive these command-line tools (and their end-to-end test)
     blender python3-numpy  # the Blender add-on (blender/nerfpt_blender) and its tests (ctest -L blender)
+    libopenmpi-dev openmpi-bin  # mpirun -np N nerfpt render (NERFPT_MPI) and its tests (tests/cli/mpi_test.sh)
     clang libclang-rt-14-dev  # the ASan + UBSan build and the libFuzzer harnesses (scripts/test.sh, scripts/fuzz.sh)
     libturbojpeg0-dev nodejs chromium  # nerfpt serve: JPEG frames; node + npm fetch the page's assets; its browser test
 )

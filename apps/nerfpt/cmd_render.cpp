@@ -16,6 +16,7 @@
 #include "input_checks.h"
 #include "interrupt.h"
 #include "render_outputs.h"
+#include "render_ranks.h"
 #include "render_sequence.h"
 #include "media/volume_set.h"
 #include "render/backend/render_backend.h"
@@ -50,7 +51,8 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
     cmd->footer(
         "Options left out take the scene's own settings (glTF scene extras or the JSON scene's \"render\"),\n"
         "then the defaults 640x480, 64 spp, max depth 16, seed 0.\n"
-        "Example: nerfpt render scenes/example/scene.gltf -o out/example.exr --spp 256 --res 1280x960");
+        "Example: nerfpt render scenes/example/scene.gltf -o out/example.exr --spp 256 --res 1280x960\n"
+        "Under mpirun -np N (a build with MPI): a sequence's frames, or a still's samples, split over the N ranks.");
     cmd->add_option("SCENE", args.scene, "Scene file: .gltf, .glb, .obj or .json (docs/formats.md)")
         ->required();
     cmd->add_option("-o,--output", args.output,
@@ -146,6 +148,8 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
 }
 
 int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+    dist::MpiWorld world;  // started by mpirun: MPI, one GPU per rank of a node (render_ranks.h)
+    if (world.size() > 1) return run_render_ranks(args, global, interrupts, world);
     if (!args.frames.empty()) return run_render_sequence(args, global, interrupts);
     const auto sequence_only = [](const char* option) {
         return Error(std::string(option) + ": is for sequences (with --frames FIRST-LAST)");

@@ -47,7 +47,8 @@ ExrMetadata frame_metadata(const render::CameraView& cam, int frame, double time
 
 }  // namespace
 
-int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
+int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, InterruptGuard& interrupts,
+                        const FrameSharing& sharing) {
     if (args.denoise) throw Error("--denoise: not available with --frames yet (render the frames as stills)");
     if (args.backend == "optix") render::choose_render_backend(args.backend, nullptr);  // fails before loading
     const fs::path pattern = args.output;
@@ -101,17 +102,22 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
             todo.push_back(f);
     const std::string task_text =
         task.count > 1 ? fmt::format("task {} of {}: ", task.index, task.count) : std::string();
+    const size_t already = frames.size() - todo.size();
     spdlog::info("{}{} of {} frames to render ({} already done), {}x{}, {} spp, {} fps, backend {}", task_text,
-                 todo.size(), frames.size(), frames.size() - todo.size(), resolved.width, resolved.height, resolved.spp,
-                 fps, resolved.backend);
+                 todo.size(), frames.size(), already, resolved.width, resolved.height, resolved.spp, fps,
+                 resolved.backend);
+    const bool all_done = todo.empty();
+    if (sharing.share) todo = sharing.share(todo);  // this rank's part of rank 0's list
     if (scene.animation)
         spdlog::info("animation '{}': {:.3f} s to {:.3f} s (frames {:.1f} to {:.1f})", scene.animation->animation.name,
                      scene.animation->animation.start, scene.animation->animation.end,
                      scene.animation->animation.start * fps, scene.animation->animation.end * fps);
-    if (todo.empty()) {
-        fmt::print("nothing to render: {} frames already written (--overwrite renders them again)\n", frames.size());
+    if (all_done) {
+        if (sharing.leader)
+            fmt::print("nothing to render: {} frames already written (--overwrite renders them again)\n", frames.size());
         return 0;
     }
+    if (todo.empty()) return 0;  // more ranks than frames left
 
     // Prepared once, at the file's rest pose, whichever frame comes first: every process builds the same
     // structures and poses them to its frame, so a frame is the same image whichever task renders it.
@@ -119,10 +125,16 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
     ProgressSettings ps;
     ps.style = progress_style(stream_is_tty(stderr), global.quiet);
     const auto t_shot = std::chrono::steady_clock::now();
+    const auto since = [](std::chrono::steady_clock::time_point t) {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    };
+    double pose_s = 0.0, render_s = 0.0;  // the shot's time in posing + updating, and in rendering
     size_t done = 0;
     for (int f : todo) {
         const double time = scene::frame_time(f, fps);
+        const auto t_pose = std::chrono::steady_clock::now();
         renderer->update(scene::pose_scene(scene, time));
+        pose_s += since(t_pose);
         render::RenderOptions frame_options = resolved;
         frame_options.seed = dist::frame_seed(seed, f);
         const fs::path exr = dist::frame_path(pattern, f);
@@ -134,6 +146,7 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
         const Image image = renderer->render(
             frame_options, [&progress](uint64_t d, uint64_t total) { progress.update(d, total); }, nullptr, &aovs);
         progress.finish();
+        render_s += since(t0);
         const ExrMetadata meta =
             frame_metadata(render::make_camera_view(scene, resolved.width, resolved.height), f, time, fps, frame_options.seed);
         {
@@ -150,13 +163,21 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
         const double frame_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const double shot_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_shot).count();
         const double left_s = shot_s / double(done) * double(todo.size() - done);
-        fmt::print("wrote {} (frame {}, {:.3f} s) in {}; {}{} of {} frames, {} left\n", exr.string(), f, time,
-                   format_seconds(frame_s), task_text, done + (frames.size() - todo.size()), frames.size(),
-                   format_seconds(left_s));
+        if (sharing.share)  // this rank's frames
+            fmt::print("wrote {} (frame {}, {:.3f} s) in {}; {}{}{} of {} frames, {} left\n", exr.string(), f, time,
+                       format_seconds(frame_s), task_text, sharing.rank_text, done, todo.size(), format_seconds(left_s));
+        else
+            fmt::print("wrote {} (frame {}, {:.3f} s) in {}; {}{} of {} frames, {} left\n", exr.string(), f, time,
+                       format_seconds(frame_s), task_text, done + already, frames.size(), format_seconds(left_s));
         std::fflush(stdout);
     }
-    fmt::print("rendered {} frames in {}\n", done,
-               format_seconds(std::chrono::duration<double>(std::chrono::steady_clock::now() - t_shot).count()));
+    const double shot_s = since(t_shot);
+    fmt::print("{}rendered {} frames in {}\n", sharing.rank_text, done, format_seconds(shot_s));
+    // Where a frame's time goes (the shot benchmark, docs/benchmarks.md): rendering against posing the scene and
+    // writing the files.
+    spdlog::info("{}per frame: {:.2f} ms rendering, {:.2f} ms posing and updating, {:.2f} ms writing and the rest",
+                 sharing.rank_text, 1e3 * render_s / double(done), 1e3 * pose_s / double(done),
+                 1e3 * (shot_s - render_s - pose_s) / double(done));
     return 0;
 }
 

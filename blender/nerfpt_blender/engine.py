@@ -1,6 +1,11 @@
 """The "nerfpt" render engine: F12 exports the scene (export_scene), runs `nerfpt render` with the scene's
 resolution, samples, max bounces, seed and camera, shows its progress, and loads its EXR into the render result.
 Esc stops the child process; the temporary folder (glTF, textures, EXR) is removed in every case.
+
+Render Animation calls the engine once per frame. The scene is exported once for the whole job, with its
+animation (export_scene.export(animation=True)), at the job's first frame; each frame then runs
+`nerfpt render --frames F` on that file, so nerfpt poses the scene itself (frame F at F / fps seconds, the
+seed derived from the seed and F). The export lives until the job ends (render_complete / render_cancel).
 """
 
 import os
@@ -24,6 +29,24 @@ def _image_size(scene):
     return max(1, r.resolution_x * r.resolution_percentage // 100), max(
         1, r.resolution_y * r.resolution_percentage // 100
     )
+
+
+# The running Render Animation job's export: {"key", "tmp", "gltf", "notes"}; empty between jobs.
+_animation = {}
+# Exports made (tests count them: one per Render Animation job).
+export_count = 0
+
+
+def _drop_animation_export(*_args):
+    if _animation.get("tmp"):
+        shutil.rmtree(_animation["tmp"], ignore_errors=True)
+    _animation.clear()
+
+
+def _animation_key(scene, view_layer_name, width, height):
+    """What the export depends on beyond the scene's contents (which a job does not change)."""
+    r = scene.render
+    return (scene.name, view_layer_name, scene.frame_start, scene.frame_end, r.fps, width, height)
 
 
 class NerfptRenderEngine(bpy.types.RenderEngine):
@@ -58,6 +81,26 @@ class NerfptRenderEngine(bpy.types.RenderEngine):
         hook = NerfptRenderEngine.test_cancel
         return bool(hook and child is not None and hook(child))
 
+    def _export(self, depsgraph, scene, gltf, width, height, animation):
+        """The scene to `gltf` on Blender's main thread; its notes, or None when cancelled."""
+        global export_count
+        self.update_stats("", "nerfpt: exporting the scene" + (" and its animation" if animation else ""))
+        # Blender's scene, not the render's copy: the exporter is an operator and reads bpy.data.
+        original = bpy.data.scenes[scene.name]
+        view_layer = original.view_layers[depsgraph.view_layer.name]
+        export_count += 1
+        return main_thread.call(
+            lambda: export_scene.export(
+                original,
+                view_layer,
+                gltf,
+                resolution=(width, height),
+                absolute_paths=True,
+                animation=animation,
+            ),
+            should_cancel=self.test_break,
+        )
+
     def _render(self, depsgraph, scene):
         width, height = _image_size(scene)
         binary, _ = preferences.binary()
@@ -67,25 +110,35 @@ class NerfptRenderEngine(bpy.types.RenderEngine):
             raise NerfptError("the scene has no camera")
         tmp = tempfile.mkdtemp(prefix="nerfpt-render-")
         try:
-            gltf = os.path.join(tmp, "scene.gltf")
             exr = os.path.join(tmp, "render.exr")
-            self.update_stats("", "nerfpt: exporting the scene")
-            # Blender's scene, not the render's copy: the exporter is an operator and reads bpy.data.
-            original = bpy.data.scenes[scene.name]
-            view_layer = original.view_layers[depsgraph.view_layer.name]
-            notes = main_thread.call(
-                lambda: export_scene.export(
-                    original,
-                    view_layer,
-                    gltf,
-                    resolution=(width, height),
-                    absolute_paths=True,
-                ),
-                should_cancel=self.test_break,
-            )
-            if notes is None or self._cancelled():
-                return
+            animation = self.is_animation
+            key = _animation_key(scene, depsgraph.view_layer.name, width, height)
+            if animation and _animation.get("key") == key:
+                gltf, notes = _animation["gltf"], _animation["notes"]  # this job's export
+            else:
+                if animation:
+                    _drop_animation_export()
+                    export_dir = tempfile.mkdtemp(prefix="nerfpt-animation-")
+                    _animation.update(tmp=export_dir, gltf=os.path.join(export_dir, "scene.gltf"))
+                    gltf = _animation["gltf"]
+                else:
+                    gltf = os.path.join(tmp, "scene.gltf")
+                notes = self._export(depsgraph, scene, gltf, width, height, animation)
+                if notes is None or self._cancelled():
+                    _drop_animation_export()
+                    return
+                if animation:
+                    _animation.update(key=key, notes=notes)  # the job's other frames use it
             cmd = [binary, "render", gltf, "-o", exr, "--res", f"{width}x{height}"]
+            if animation and scene.frame_current < 0:
+                raise NerfptError(f"frame {scene.frame_current}: nerfpt renders frames 0 and later")
+            if animation:
+                # nerfpt's sequence of one frame: it poses the scene at F / fps and seeds the frame by F.
+                exr = os.path.join(tmp, "frame.#######.exr")
+                cmd = [binary, "render", gltf, "-o", exr, "--res", f"{width}x{height}"]
+                cmd += ["--frames", str(scene.frame_current), "--fps", repr(float(scene.render.fps)), "--overwrite"]
+                cmd += ["--animation", export_scene.ANIMATION_NAME] if _has_animation(gltf) else []
+                exr = os.path.join(tmp, f"frame.{scene.frame_current:07d}.exr")
             cmd += ["--spp", str(settings.samples), "--max-depth", str(export_scene.max_depth(scene))]
             cmd += ["--seed", str(settings.seed), "--camera", camera.name, "--threads", str(_threads(scene))]
 
@@ -111,12 +164,20 @@ class NerfptRenderEngine(bpy.types.RenderEngine):
                 result.layers[0].load_from_file(exr)
             finally:
                 self.end_result(result)
-            warning = ignored_report(notes, child.warnings(), gltf)
+            child_warnings = [w for w in child.warnings() if "the scene has no animation" not in w]
+            warning = ignored_report(notes, child_warnings, gltf)
             if warning:
                 self.report({"WARNING"}, warning)
             self.update_progress(1.0)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _has_animation(gltf):
+    import json
+
+    with open(gltf) as f:
+        return any(a.get("name") == export_scene.ANIMATION_NAME for a in json.load(f).get("animations", []))
 
 
 def _compatible_panels():
@@ -132,11 +193,18 @@ def _compatible_panels():
 
 def register():
     bpy.utils.register_class(NerfptRenderEngine)
+    for handlers in (bpy.app.handlers.render_init, bpy.app.handlers.render_complete, bpy.app.handlers.render_cancel):
+        if _drop_animation_export not in handlers:
+            handlers.append(_drop_animation_export)
     for p in _compatible_panels():
         p.COMPAT_ENGINES.add(NerfptRenderEngine.bl_idname)
 
 
 def unregister():
+    _drop_animation_export()
+    for handlers in (bpy.app.handlers.render_init, bpy.app.handlers.render_complete, bpy.app.handlers.render_cancel):
+        if _drop_animation_export in handlers:
+            handlers.remove(_drop_animation_export)
     for p in _compatible_panels():
         p.COMPAT_ENGINES.discard(NerfptRenderEngine.bl_idname)
     bpy.utils.unregister_class(NerfptRenderEngine)

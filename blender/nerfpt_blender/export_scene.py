@@ -17,6 +17,7 @@ from . import area_lights, gltf_post
 from .nerfpt_cli import NerfptError, ignored_report
 
 CUBE_BIN = "nerfpt_volumes.bin"
+ANIMATION_NAME = "Animation"  # the one glTF animation of an export with animation
 AREA_LIGHT_BIN = "nerfpt_area_lights.bin"
 
 # Principled BSDF inputs nerfpt ignores, with the value at which they do nothing (3.x and 4.x names).
@@ -29,8 +30,11 @@ _IGNORED_PRINCIPLED = [
 ]
 
 
-def _exporter_options(filepath):
-    """The exporter's keywords, under the names this Blender's exporter uses (3.4 and 4.x differ)."""
+def _exporter_options(filepath, animation=False):
+    """The exporter's keywords, under the names this Blender's exporter uses (3.4 and 4.x differ). With
+    `animation`, the scene's animation too, as one glTF animation (every object's action merged: nerfpt plays
+    one), sampled at every frame of the playback range (so constraints, drivers and Bezier easing come out as
+    Blender evaluates them at whole frames)."""
     wanted = {
         "filepath": filepath,
         "check_existing": False,
@@ -44,13 +48,25 @@ def _exporter_options(filepath):
         "export_lights": True,
         "export_apply": True,
         "export_yup": True,
-        "export_animations": False,
+        "export_animations": animation,
         "export_materials": "EXPORT",
         "will_save_settings": False,
         # W and W/m^2 divided by 4 pi for point and spot lights, not multiplied by 683 lm/W: the radiometric
         # intensity Cycles' lights have, which nerfpt's `intensity` is.
         ("export_import_convert_lighting_mode", "convert_lighting_mode"): "COMPAT",
     }
+    if animation:
+        wanted.update(
+            {
+                "export_frame_range": True,
+                "export_frame_step": 1,
+                "export_force_sampling": True,
+                "export_nla_strips": False,
+                "export_nla_strips_merged_animation_name": ANIMATION_NAME,
+                "export_optimize_animation_size": False,
+                ("export_anim_slide_to_zero",): False,  # 4.x: keep frame F at F / fps
+            }
+        )
     known = set(bpy.ops.export_scene.gltf.get_rna_type().properties.keys())
     options = {}
     for key, value in wanted.items():
@@ -341,10 +357,12 @@ def max_depth(scene):
     return scene.nerfpt.max_bounces + 1
 
 
-def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
+def export(scene, view_layer, filepath, resolution=None, absolute_paths=False, animation=False):
     """Writes filepath (.gltf + .bin + textures beside it) with the scene's nerfpt render settings as scene
-    extras. Returns the list of warnings. Raises NerfptError. Must run on the main thread (the exporter is an
-    operator)."""
+    extras. With `animation`, also the scene's animation (Render Animation exports once for all its frames):
+    nerfpt's frame F is at F / fps seconds, as the exporter writes Blender's frame F, with fps the scene's
+    (written as the `fps` extra). Returns the list of warnings. Raises NerfptError. Must run on the main
+    thread (the exporter is an operator)."""
     gltf_dir = os.path.dirname(os.path.abspath(filepath))
     notes = []
     camera = scene.camera
@@ -355,7 +373,7 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
         override["window"] = wm.windows[0]
     try:
         with bpy.context.temp_override(**override):
-            result = bpy.ops.export_scene.gltf(**_exporter_options(filepath))
+            result = bpy.ops.export_scene.gltf(**_exporter_options(filepath, animation))
             # Final transforms (constraints, parents, drivers), as the exporter saw them.
             depsgraph = bpy.context.evaluated_depsgraph_get()
     except (RuntimeError, TypeError) as e:
@@ -408,6 +426,15 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
                 "extras": _volume_extras(obj, world, gltf_dir, absolute_paths, notes),
             }
         )
+    if animation:
+        # The add-on's own nodes are placed where the objects are now; they do not follow the animation.
+        for obj in scene.objects:
+            moving = obj.animation_data is not None and obj.animation_data.action is not None
+            if moving and renders(obj, view_layer) and (
+                (obj.type == "VOLUME" and obj.nerfpt_volume.is_capture)
+                or (obj.type == "LIGHT" and obj.data.type == "AREA")
+            ):
+                notes.append(f"'{obj.name}' is animated: nerfpt renders it where it is at frame {scene.frame_current}")
     data = gltf_post.add_volume_cubes(gltf, cubes, CUBE_BIN)
     if data:
         with open(os.path.join(gltf_dir, CUBE_BIN), "wb") as f:
@@ -450,6 +477,8 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False):
         max_depth=max_depth(scene),
         background=_world_background(scene.world, notes),
     )
+    if animation:
+        gltf_post.set_scene_extras(gltf, fps=float(r.fps))  # the exporter's seconds are frame / r.fps
     tmp = filepath + ".tmp"
     with open(tmp, "w") as f:
         json.dump(gltf, f, indent=1)

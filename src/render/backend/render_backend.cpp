@@ -47,6 +47,12 @@ std::string choose_render_backend(const std::string& requested, std::string* not
     return "cpu";
 }
 
+PartialFilm SceneRenderer::render_partial(const RenderOptions& resolved, uint32_t, uint32_t, const ProgressFn&) {
+    throw Error("--backend " + resolved.backend +
+                ": a still's samples split over MPI ranks are rendered on the CPU backend only so far (--backend "
+                "cpu; sequences, --frames, split their frames over ranks on any backend)");
+}
+
 namespace {
 
 class CpuSceneRenderer final : public SceneRenderer {
@@ -58,6 +64,10 @@ class CpuSceneRenderer final : public SceneRenderer {
                  AovImages* aovs) override {
         if (denoised) throw Error("--denoise: the denoiser is OptiX's and needs --backend optix");
         return m_renderer.render(resolved, progress, aovs);
+    }
+    PartialFilm render_partial(const RenderOptions& resolved, uint32_t begin, uint32_t end,
+                               const ProgressFn& progress) override {
+        return m_renderer.render_partial(resolved, begin, end, progress);
     }
 
   private:

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "render/renderer.h"
+#include "render/sample_sums.h"
 #include "scene/animation.h"
 
 namespace npt::render {
@@ -30,6 +31,10 @@ class SceneRenderer {
                          Image* denoised = nullptr, AovImages* aovs = nullptr) = 0;
     // The same render into a frame the renderer keeps (a viewer's or an animation's frames): OptiX downloads into
     // page-locked memory it reuses instead of a new image. The reference holds until the next call.
+    // The sums of samples [begin, end) of resolved.spp (render/sample_sums.h): one MPI rank's share of a still.
+    // The CPU's; other backends throw npt::Error.
+    virtual PartialFilm render_partial(const RenderOptions& resolved, uint32_t begin, uint32_t end,
+                                       const ProgressFn& progress = {});
     virtual const Image& render_frame(const RenderOptions& resolved) {
         m_frame = render(resolved);
         return m_frame;

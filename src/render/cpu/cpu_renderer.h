@@ -7,6 +7,7 @@
 #include "render/scene_data.h"
 
 #include "render/renderer.h"
+#include "render/sample_sums.h"
 #include "scene/animation.h"
 
 namespace npt::render::cpu {
@@ -25,12 +26,21 @@ class CpuFrameRenderer {
     void update(const scene::PoseChanges& changes);
     // options' width and height must be the prepared ones.
     Image render(const RenderOptions& options, const ProgressFn& progress, AovImages* aovs = nullptr);
+    // The sums of samples [begin, end) of options.spp (render/sample_sums.h): a process's share of a render
+    // split by sample; merged in sample order and resolved, the shares give render()'s image bit for bit.
+    PartialFilm render_partial(const RenderOptions& options, uint32_t begin, uint32_t end,
+                               const ProgressFn& progress = {});
 
   private:
+    template <class PixelFn>
+    void for_each_pixel(const RenderOptions& options, uint64_t samples_per_pixel, const ProgressFn& progress,
+                        const PixelFn& pixel);
+
     const scene::Scene& m_scene;
     std::unique_ptr<SceneData> m_data;
     std::unique_ptr<EmbreeScene> m_embree;
     int m_width, m_height;
+    uint64_t m_dropped = 0;  // NaN or infinite samples of the last render
 };
 
 // render::render's CPU half (renderer.h): RGB or, with options.transparent, RGBA; the AOVs into *aovs.
