@@ -175,19 +175,10 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     const uint32_t aov_mask = args.aovs.empty() ? 0u : render::parse_aov_list(args.aovs);
     const std::vector<AovFile> aov_files = args.aov_files ? aov_file_paths(out_exr, aov_mask) : std::vector<AovFile>{};
 
-    render::RenderOptions options;
-    if (!args.res.empty()) parse_resolution(args.res, &options.width, &options.height);
-    options.spp = args.spp;
-    options.max_depth = args.max_depth;
-    options.threads = args.threads;
-    options.transparent = args.transparent;
-    options.aovs = aov_mask;
+    render::RenderOptions options = render_options_from_args(args, aov_mask);
 
     const auto t_load = std::chrono::steady_clock::now();
-    scene::LoadOptions load;
-    load.camera_name = args.camera;
-    load.animation_name = args.animation;
-    const scene::Scene scene = scene::load_scene(args.scene, load);
+    const scene::Scene scene = scene::load_scene(args.scene, scene_load_options(args));
     for (const fs::path& out : {out_exr, out_png, out_noisy})
         if (out != out_noisy || args.denoise) refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
     for (const AovFile& f : aov_files) refuse_overwriting_inputs(f.path, "--aov-files", scene_inputs(scene));
@@ -221,10 +212,7 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
         if (args.denoise) write_exr_layers(out_noisy, image, {});
         const Image& shown = args.denoise ? denoised : image;
         write_exr_layers(out_exr, shown, aov_layers(aovs, aov_mask));
-        if (shown.channels == 4)
-            write_png_premultiplied(out_png, shown, args.exposure);
-        else
-            write_png(out_png, shown, args.exposure);
+        write_render_png(out_png, shown, args.exposure);
         for (const AovFile& f : aov_files) write_aov_file(f, aovs);
     }
     const double samples = double(resolved.width) * resolved.height * resolved.spp;

@@ -19,6 +19,7 @@
 #include "backend_option.h"
 #include "nerf/trainer.h"
 #include "relight_stage.h"
+#include "status_line.h"
 
 namespace npt::cli {
 namespace fs = std::filesystem;
@@ -108,36 +109,15 @@ void check_output(const fs::path& out, bool resume, bool force) {
                     "' exists: pass --resume to continue training it or --force to start over");
 }
 
-// One status line: a bar over steps (or time) on a terminal, a plain line every few seconds otherwise.
-class TrainProgress {
-  public:
-    TrainProgress(bool tty, bool quiet) : m_tty(tty), m_quiet(quiet) {}
-    void update(const nerf::StepStats& s, double fraction, double rays_per_s, double elapsed, bool force) {
-        if (m_quiet) return;
-        const double now = Progress::steady_seconds();
-        if (!force && now < m_next) return;
-        m_next = now + (m_tty ? 0.2 : 5.0);
-        const std::string text = fmt::format(
-            "train {} {:3.0f}% step {} loss {:.5f} psnr {:.2f} dB {} rays/s {} samples/step {}",
-            format_bar(fraction, 20), 100.0 * fraction, s.step, s.loss, nerf::psnr_from_mse(s.mse),
-            format_count(rays_per_s), format_count(double(s.samples)), format_eta_clock(elapsed));
-        if (m_tty) {
-            fmt::print(stderr, "\r{}\x1b[K", text);
-            m_open = true;
-        } else {
-            fmt::print(stderr, "{}\n", text);
-        }
-    }
-    void finish() {
-        if (m_open) fmt::print(stderr, "\n");
-        m_open = false;
-    }
-
-  private:
-    bool m_tty, m_quiet;
-    bool m_open = false;
-    double m_next = 0;
-};
+// The training's status line: a bar over steps (or time), the loss and the rate. The text is composed only
+// when the line is due.
+void show_train_progress(StatusLine& line, const nerf::StepStats& s, double fraction, double rays_per_s,
+                         double elapsed, bool force) {
+    if (!line.due(force)) return;
+    line.print(fmt::format("train {} {:3.0f}% step {} loss {:.5f} psnr {:.2f} dB {} rays/s {} samples/step {}",
+                           format_bar(fraction, 20), 100.0 * fraction, s.step, s.loss, nerf::psnr_from_mse(s.mse),
+                           format_count(rays_per_s), format_count(double(s.samples)), format_eta_clock(elapsed)));
+}
 
 }  // namespace
 
@@ -193,7 +173,7 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         nerf::save_model(out, model, true);
     };
     interrupts.set_cooperative(true);
-    TrainProgress progress(tty, global.quiet);
+    StatusLine progress(tty, global.quiet);
     const uint64_t interval = uint64_t(model.config.training.checkpoint_interval);
     double rays_ema = 0;
     nerf::StepStats stats;
@@ -217,7 +197,7 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
             args.seconds > 0 && !args.steps
                 ? std::min(1.0, elapsed / args.seconds)
                 : std::min(1.0, double(trainer.steps_done()) / double(target_steps));
-        progress.update(stats, fraction, rays_ema, elapsed, false);
+        show_train_progress(progress, stats, fraction, rays_ema, elapsed, false);
         if (!std::isfinite(stats.loss))
             throw Error("training diverged at step " + std::to_string(stats.step) +
                         " (loss is not finite); the last checkpoint in '" + out.string() + "' is kept");
@@ -229,7 +209,7 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
             Progress::steady_seconds() - last_checkpoint >= min_checkpoint_seconds)
             save();
     }
-    progress.update(stats, 1.0, rays_ema, model.training->elapsed_seconds, true);
+    show_train_progress(progress, stats, 1.0, rays_ema, model.training->elapsed_seconds, true);
     progress.finish();
     if (args.relightable && !interrupted) {
         save();  // the NeRF is safe on disk before the relight stage starts

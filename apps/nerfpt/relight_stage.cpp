@@ -12,39 +12,9 @@
 #include "nerf/relight/relight_samples.h"
 #include "nerf/relight/relight_trainer.h"
 #include "nerf/trainer.h"
+#include "status_line.h"
 
 namespace npt::cli {
-
-namespace {
-
-// One status line, a bar on a terminal, a line every few seconds in a log.
-class StageLine {
-  public:
-    explicit StageLine(bool quiet) : m_quiet(quiet), m_tty(stream_is_tty(stderr)) {}
-    void show(const std::string& text, bool force) {
-        if (m_quiet) return;
-        const double now = Progress::steady_seconds();
-        if (!force && now < m_next) return;
-        m_next = now + (m_tty ? 0.2 : 5.0);
-        if (m_tty) {
-            fmt::print(stderr, "\r{}\x1b[K", text);
-            m_open = true;
-        } else {
-            fmt::print(stderr, "{}\n", text);
-        }
-    }
-    void finish() {
-        if (m_open) fmt::print(stderr, "\n");
-        m_open = false;
-    }
-
-  private:
-    bool m_quiet, m_tty;
-    bool m_open = false;
-    double m_next = 0;
-};
-
-}  // namespace
 
 bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const RelightStageOptions& options,
                        InterruptGuard& interrupts) {
@@ -55,7 +25,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ss.normals = options.normals;
     ss.normal_smoothing = options.normal_smoothing;
     ss.seed = model.config.training.seed;
-    StageLine line(options.quiet);
+    StatusLine line(stream_is_tty(stderr), options.quiet);
     std::unique_ptr<nerf::FieldQuery> query = nerf::make_field_query(options.backend, model);
     const nerf::RelightSamples samples = nerf::gather_relight_samples(model, data, *query, ss, [&](size_t done, size_t total) {
         line.show(fmt::format("relight: surface points {} {:3.0f}% {}/{}", format_bar(double(done) / total, 20),

@@ -1,16 +1,43 @@
 // The files `nerfpt render` writes: output checks, the AOV layers and files, the scene's inputs that must not be
-// written over. Shared by stills (cmd_render.cpp) and sequences (render_sequence.cpp).
+// written over. Shared by stills (cmd_render.cpp), sequences (render_sequence.cpp) and MPI stills
+// (render_ranks.cpp).
 #include "render_outputs.h"
 
 #include <unistd.h>
 
 #include <algorithm>
 
+#include "cmd_render.h"
 #include "core/error.h"
 #include "media/volume_set.h"
 
 namespace npt::cli {
 namespace fs = std::filesystem;
+
+render::RenderOptions render_options_from_args(const RenderArgs& args, uint32_t aov_mask) {
+    render::RenderOptions options;
+    if (!args.res.empty()) parse_resolution(args.res, &options.width, &options.height);
+    options.spp = args.spp;
+    options.max_depth = args.max_depth;
+    options.threads = args.threads;
+    options.transparent = args.transparent;
+    options.aovs = aov_mask;
+    return options;
+}
+
+scene::LoadOptions scene_load_options(const RenderArgs& args) {
+    scene::LoadOptions load;
+    load.camera_name = args.camera;
+    load.animation_name = args.animation;
+    return load;
+}
+
+void write_render_png(const fs::path& png, const Image& image, float exposure) {
+    if (image.channels == 4)
+        write_png_premultiplied(png, image, exposure);
+    else
+        write_png(png, image, exposure);
+}
 
 // Refuses an output we could not write, before minutes of rendering are spent.
 void check_output(const fs::path& out) {

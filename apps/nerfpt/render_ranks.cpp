@@ -47,17 +47,8 @@ int render_still_ranks(const RenderArgs& args, const GlobalSettings& global, Int
     const std::vector<AovFile> aov_files =
         args.aov_files ? aov_file_paths(out_exr, aov_mask) : std::vector<AovFile>{};
 
-    render::RenderOptions options;
-    if (!args.res.empty()) parse_resolution(args.res, &options.width, &options.height);
-    options.spp = args.spp;
-    options.max_depth = args.max_depth;
-    options.threads = args.threads;
-    options.transparent = args.transparent;
-    options.aovs = aov_mask;
-    scene::LoadOptions load;
-    load.camera_name = args.camera;
-    load.animation_name = args.animation;
-    const scene::Scene scene = scene::load_scene(args.scene, load);
+    render::RenderOptions options = render_options_from_args(args, aov_mask);
+    const scene::Scene scene = scene::load_scene(args.scene, scene_load_options(args));
     for (const fs::path& out : {out_exr, out_png})
         refuse_overwriting_inputs(out, "--output", scene_inputs(scene));
     for (const AovFile& f : aov_files) refuse_overwriting_inputs(f.path, "--aov-files", scene_inputs(scene));
@@ -110,10 +101,7 @@ int render_still_ranks(const RenderArgs& args, const GlobalSettings& global, Int
     {
         auto no_interrupt = interrupts.hold();  // every file complete, or an interrupt waits for them
         write_exr_layers(out_exr, image, aov_layers(aovs, aov_mask));
-        if (image.channels == 4)
-            write_png_premultiplied(out_png, image, args.exposure);
-        else
-            write_png(out_png, image, args.exposure);
+        write_render_png(out_png, image, args.exposure);
         for (const AovFile& f : aov_files) write_aov_file(f, aovs);
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -63,18 +63,9 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
     check_output(dist::frame_path(pattern, range.first));
     const uint32_t aov_mask = args.aovs.empty() ? 0u : render::parse_aov_list(args.aovs);
 
-    render::RenderOptions options;
-    if (!args.res.empty()) parse_resolution(args.res, &options.width, &options.height);
-    options.spp = args.spp;
-    options.max_depth = args.max_depth;
-    options.threads = args.threads;
-    options.transparent = args.transparent;
-    options.aovs = aov_mask;
+    render::RenderOptions options = render_options_from_args(args, aov_mask);
 
-    scene::LoadOptions load;
-    load.camera_name = args.camera;
-    load.animation_name = args.animation;
-    scene::Scene scene = scene::load_scene(args.scene, load);
+    scene::Scene scene = scene::load_scene(args.scene, scene_load_options(args));
     const std::vector<InputFile> inputs = scene_inputs(scene);
     for (int f : frames) {
         fs::path exr = dist::frame_path(pattern, f), png = exr;
@@ -151,10 +142,7 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
             frame_metadata(render::make_camera_view(scene, resolved.width, resolved.height), f, time, fps, frame_options.seed);
         {
             auto no_interrupt = interrupts.hold();  // whole files only: an interrupt waits for this frame's writes
-            if (image.channels == 4)
-                write_png_premultiplied(png, image, args.exposure);
-            else
-                write_png(png, image, args.exposure);
+            write_render_png(png, image, args.exposure);
             if (args.aov_files)
                 for (const AovFile& a : aov_file_paths(exr, aov_mask)) write_aov_file(a, aovs);
             write_exr_layers(exr, image, aov_layers(aovs, aov_mask), &meta);  // last: it marks the frame done

@@ -2,7 +2,9 @@
 #include "nerf/mlp_batch.h"
 
 #include <algorithm>
+#include <cmath>
 
+#include "core/rng.h"
 #include "nerf/matmul.h"
 
 namespace npt::nerf {
@@ -16,6 +18,15 @@ size_t activation_offset(const MlpShape& s, size_t n, int l) {
 }
 
 }  // namespace
+
+void init_mlp_xavier(const MlpShape& s, float* weights, Pcg32& rng) {
+    for (int l = 0; l < s.layer_count(); ++l) {
+        const int ni = s.layer_inputs(l), no = s.layer_outputs(l);
+        const float limit = std::sqrt(6.0f / float(ni + no));
+        float* lw = weights + s.layer_offset(l);
+        for (int i = 0; i < ni * no; ++i) lw[i] = (2.0f * rng.next_float() - 1.0f) * limit;
+    }
+}
 
 const float* MlpActivations::output(const MlpShape& s) const {
     return layer_outputs.data() + activation_offset(s, n, s.hidden_layers);

@@ -9,7 +9,16 @@
 
 #include "nerf/mlp.h"
 
+namespace npt {
+class Pcg32;
+}
+
 namespace npt::nerf {
+
+// Xavier-uniform weights, as tiny-cuda-nn initialises its MLPs: layer by layer, each weight uniform in
+// +-sqrt(6 / (inputs + outputs)), drawn from `rng` in order. Shared by the NeRF and the relight fields, whose
+// trained numbers the tests compare, so the order of draws is part of the contract.
+void init_mlp_xavier(const MlpShape& s, float* weights, Pcg32& rng);
 
 // What the backward pass needs from the forward pass: every layer's post-activation output.
 struct MlpActivations {

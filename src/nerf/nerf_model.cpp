@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/rng.h"
+#include "nerf/mlp_batch.h"
 
 namespace npt::nerf {
 
@@ -74,20 +75,6 @@ std::vector<Vec3> training_view_directions(const std::vector<Camera>& cameras, c
     return dirs;
 }
 
-namespace {
-
-void init_mlp(const MlpShape& s, float* w, Pcg32& rng) {
-    // Xavier-uniform, as tiny-cuda-nn initialises its MLPs.
-    for (int l = 0; l < s.layer_count(); ++l) {
-        const int ni = s.layer_inputs(l), no = s.layer_outputs(l);
-        const float limit = std::sqrt(6.0f / float(ni + no));
-        float* lw = w + s.layer_offset(l);
-        for (int i = 0; i < ni * no; ++i) lw[i] = (2.0f * rng.next_float() - 1.0f) * limit;
-    }
-}
-
-}  // namespace
-
 NerfModel create_model(const NerfConfig& config, float aabb_scale, const Mat4& world_to_model) {
     if (!(aabb_scale > 0.0f) || !std::isfinite(aabb_scale))
         throw Error("aabb_scale must be a positive number, not " + std::to_string(aabb_scale));
@@ -101,8 +88,8 @@ NerfModel create_model(const NerfConfig& config, float aabb_scale, const Mat4& w
         "lower encoding.log2_table_size, encoding.levels or encoding.features_per_level in the config",
         [&] { m.params.resize(l.total); });
     Pcg32 rng(config.training.seed, 0x5eed);
-    init_mlp(l.density, m.params.data() + l.density_offset, rng);
-    init_mlp(l.color, m.params.data() + l.color_offset, rng);
+    init_mlp_xavier(l.density, m.params.data() + l.density_offset, rng);
+    init_mlp_xavier(l.color, m.params.data() + l.color_offset, rng);
     for (size_t i = l.grid_offset; i < l.total; ++i) m.params[i] = (2.0f * rng.next_float() - 1.0f) * 1e-4f;
     m.occupancy = OccupancyGrid(cascades_for_aabb_scale(aabb_scale), config.occupancy.resolution);
     return m;

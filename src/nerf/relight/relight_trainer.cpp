@@ -58,15 +58,6 @@ inline BsdfSplit split_bsdf(float roughness, Vec3 wo, Vec3 wi) {
     return {f1 - f0, f0};
 }
 
-void init_mlp(const MlpShape& s, float* w, Pcg32& rng) {
-    for (int l = 0; l < s.layer_count(); ++l) {
-        const int ni = s.layer_inputs(l), no = s.layer_outputs(l);
-        const float limit = std::sqrt(6.0f / float(ni + no));
-        float* lw = w + s.layer_offset(l);
-        for (int i = 0; i < ni * no; ++i) lw[i] = (2.0f * rng.next_float() - 1.0f) * limit;
-    }
-}
-
 }  // namespace
 
 RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const RelightSamples& samples,
@@ -87,7 +78,7 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
     m_params.assign(m_total, 0.0f);
     m_grads.assign(m_total, 0.0f);
     Pcg32 rng(settings.seed, 0x1a7b);
-    init_mlp(m_layout.mlp, m_params.data() + m_layout.mlp_offset, rng);
+    init_mlp_xavier(m_layout.mlp, m_params.data() + m_layout.mlp_offset, rng);
     for (size_t i = m_layout.grid_offset; i < m_layout.total; ++i)
         m_params[i] = (2.0f * rng.next_float() - 1.0f) * 1e-4f;
     // A uniform grey environment that gives the mean pixel on a mid-grey unshadowed diffuse surface.
