@@ -101,7 +101,8 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         "               the model carries (origin at the base centre, +Z up; metres with --height)\n"
         "  4 split      every --holdout-every'th frame -> transforms_test.json, the rest -> "
         "transforms_train.json\n"
-        "  5 train      -> model.npt (nerfpt train on the training frames, --train-time seconds)\n"
+        "  5 train      -> model.npt (nerfpt train on the training frames, --train-time seconds; with\n"
+        "                  --relightable also the relight stage)\n"
         "  6 eval       PSNR/SSIM on the held-out frames -> eval/ (renders, comparisons, metrics.json)\n"
         "  7 turntable  -> turntable.mp4, an orbit at the capture's camera distance, height and field of "
         "view\n"
@@ -158,6 +159,15 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         ->check(CLI::Range(0, 64))
         ->capture_default_str();
     cmd->add_option("--config", args.config, "train: JSON model and training settings (docs/formats.md)");
+    cmd->add_flag("--relightable", args.relightable,
+                  "train: also fit albedo, roughness and normals and estimate the capture light, so that scenes "
+                  "light the object with their own lights (nerfpt train --relightable; docs/relighting.md). Added "
+                  "to a capture trained without it, it runs only that stage");
+    cmd->add_option("--relight-steps", args.relight_steps, "train: optimiser steps of the relight stage (default: 1500)")
+        ->check(CLI::Range(uint64_t(1), uint64_t(10000000)));
+    cmd->add_option("--relight-points", args.relight_points,
+                    "train: surface points of the relight stage (default: 262144 on a GPU, 32768 on the CPU)")
+        ->check(CLI::Range(64, 1 << 22));
     cmd->add_option("--turntable-frames", args.turntable_frames, "Frames of the turntable video (0: none)")
         ->check(CLI::Range(0, 100000))
         ->capture_default_str();
@@ -309,8 +319,11 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
     const capture::RigSummary rig = capture::summarize_rig(transforms);
     const int downscale = args.downscale > 0 ? args.downscale : auto_downscale(rig.width, rig.height);
     const double target_seconds = args.train_steps ? 0.0 : args.train_seconds;
-    const nlohmann::json train_target = {
-        {"steps", args.train_steps}, {"time", target_seconds}, {"downscale", downscale}};
+    nlohmann::json train_target = {{"steps", args.train_steps}, {"time", target_seconds}, {"downscale", downscale}};
+    if (args.relightable) {  // absent otherwise: older records stay valid
+        train_target["relight_steps"] = args.relight_steps;
+        train_target["relight_points"] = args.relight_points;
+    }
     std::error_code ec;
     bool trained = false;  // in this run: the object's box is refined again from the new model
     if (record.done("train") && record.stage("train").value("target", nlohmann::json()) == train_target &&
@@ -335,6 +348,9 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         t.config = resume ? std::string() : args.config;
         t.resume = resume;
         t.resume_hint = continue_hint;
+        t.relightable = args.relightable;
+        t.relight_steps = args.relight_steps;
+        t.relight_points = args.relight_points;
         const int rc = run_train(t, global, interrupts);
         if (rc != 0) return rc;
         trained = true;

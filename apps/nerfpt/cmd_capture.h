@@ -25,6 +25,9 @@ struct CaptureArgs {
     int aabb_scale = 16;
     double min_registered = 0.5;
     // object
+    bool relightable = false;  // train: the relight stage after the NeRF (nerfpt train --relightable)
+    uint64_t relight_steps = 1500;
+    int relight_points = 0;  // 0: nerfpt train's default for the backend
     double height_m = 0;  // the object's real height in metres; 0: the object frame stays in capture units
     // split, train, eval
     int holdout_every = 8;  // 0: train on every frame, no held-out PSNR

@@ -71,6 +71,18 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
             << rerun_log;
     EXPECT_EQ(fs::last_write_time(work / "model.npt"), model_time);
 
+    // --relightable added afterwards runs only the relight stage on the trained model (no more NeRF steps); a
+    // few points and steps: this checks the wiring (the stage's quality is measured in docs/benchmarks.md).
+    const uint64_t steps = nerf::load_model(work / "model.npt").training->adam.step;
+    std::vector<std::string> relit = capture;
+    for (const char* a : {"--relightable", "--relight-steps", "20", "--relight-points", "512"}) relit.push_back(a);
+    const int relit_rc = run_cli(relit, dir / "relight.log");
+    ASSERT_EQ(relit_rc, 0) << read_text(dir / "relight.log");
+    const nerf::NerfModel relightable = nerf::load_model(work / "model.npt");
+    EXPECT_TRUE(relightable.relightable()) << read_text(dir / "relight.log");
+    EXPECT_EQ(relightable.training->adam.step, steps);
+    EXPECT_EQ(read_json_file(work / "capture.json")["stages"]["train"]["target"].value("relight_steps", 0), 20);
+
     const auto estimate = capture::read_transforms_poses(work / "transforms.json");
     const auto truth = capture::read_transforms_poses(dir / "truth.json");
     const capture::MatchedPoses matched = capture::match_by_name(estimate, truth);
