@@ -411,4 +411,25 @@ void write_png_premultiplied(const fs::path& path, const Image& rgba, float expo
     write_png_channels(path, rgba, exposure_stops, 4);
 }
 
+void write_png_grey(const fs::path& path, const Image& image, int channel) {
+    check_writable(path, image);
+    if (channel < 0 || channel >= image.channels)
+        throw Error(path.string() + ": no channel " + std::to_string(channel) + " in a " +
+                    std::to_string(image.channels) + "-channel image");
+    const size_t n = size_t(image.width) * size_t(image.height), ic = size_t(image.channels);
+    std::vector<unsigned char> out(n);
+    for (size_t i = 0; i < n; ++i) {
+        const float v = image.pixels[i * ic + size_t(channel)];
+        const float c = std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f;
+        out[i] = static_cast<unsigned char>(std::lround(c * 255.0f));
+    }
+    const fs::path tmp = temp_sibling(path);
+    if (!stbi_write_png(tmp.string().c_str(), image.width, image.height, 1, out.data(), image.width)) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw Error(path.string() + ": cannot write PNG (is the folder writable?)");
+    }
+    commit_temp(tmp, path);
+}
+
 }  // namespace npt

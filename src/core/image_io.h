@@ -76,4 +76,8 @@ void write_png(const std::filesystem::path& path, const Image& image, float expo
 // alpha before the exposure and the sRGB curve; alpha 0 stores black.
 void write_png_premultiplied(const std::filesystem::path& path, const Image& rgba, float exposure_stops = 0.0f);
 
+// One channel of `image` as an 8-bit grey PNG, the value as it is (x 255, clamped to [0, 1], no sRGB curve):
+// for data such as an alpha map.
+void write_png_grey(const std::filesystem::path& path, const Image& image, int channel);
+
 }  // namespace npt

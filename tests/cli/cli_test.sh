@@ -49,7 +49,7 @@ for opt in SCENE --camera; do
 done
 run eval --help
 [[ $rc -eq 0 ]] || fail "eval --help: exit code $rc"
-for opt in MODEL DATA --split --output --every --downscale --threads PSNR SSIM metrics.json; do
+for opt in MODEL DATA --split --output --every --downscale --threads --alpha --masks PSNR SSIM metrics.json; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt eval --help does not mention $opt"
 done
 run view --help
@@ -108,12 +108,15 @@ expect_error 1 "no_such_folder" render "$tmp/missing.gltf" -o "$tmp/no_such_fold
 printf 'not a model' >"$tmp/bad.npt"
 expect_error 2 "--every" eval "$tmp/bad.npt" "$tmp" --every 0
 expect_error 2 "--downscale" eval "$tmp/bad.npt" "$tmp" --downscale 0
+expect_error 2 "--alpha requires --output" eval "$tmp/bad.npt" "$tmp" --alpha
 expect_error 2 "excludes" view "$tmp/bad.npt" -o "$tmp/a.png" --camera "$tmp:0" --orbit 10
 expect_error 2 "--elevation" view "$tmp/bad.npt" -o "$tmp/a.mp4" --elevation 90
 expect_error 2 "--res" view "$tmp/bad.npt" -o "$tmp/a.mp4" --res 0x10
 expect_error 1 "MODEL.*missing\.npt.*not found" eval "$tmp/missing.npt" "$tmp"
 expect_error 1 "MODEL.*is a folder" eval "$tmp" "$tmp"
 expect_error 1 "DATA.*no_data" eval "$tmp/bad.npt" "$tmp/no_data"
+expect_error 1 "--masks.*no_masks.*no such file" eval "$tmp/bad.npt" "$tmp" --masks "$tmp/no_masks"
+expect_error 1 "--masks.*bad\.npt.*not a folder" eval "$tmp/bad.npt" "$tmp" --masks "$tmp/bad.npt"
 expect_error 1 "--output.*not a folder" eval "$tmp/bad.npt" "$tmp" -o "$tmp/bad.npt"
 expect_error 1 "bad\.npt" eval "$tmp/bad.npt" "$tmp"
 expect_error 1 "MODEL.*missing\.npt" view "$tmp/missing.npt" -o "$tmp/a.mp4"

@@ -18,6 +18,7 @@
 
 #include "core/image_io.h"
 #include "core/image_metrics.h"
+#include "core/mask_metrics.h"
 #include "nerf/eval_images.h"
 #include "nerf/model_file.h"
 #include "nerf/render_view.h"
@@ -63,7 +64,8 @@ class EvalViewCli : public ::testing::Test {
 };
 
 TEST_F(EvalViewCli, InfoDescribesAModel) {
-    ASSERT_EQ(run_cli({"info", (dir() / "m.npt").string()}, dir() / "info.log"), 0) << slurp(dir() / "info.log");
+    ASSERT_EQ(run_cli({"info", (dir() / "m.npt").string()}, dir() / "info.log"), 0)
+        << slurp(dir() / "info.log");
     std::string out = slurp(dir() / "info.log");
     EXPECT_NE(out.find("hash grid 4 levels x 2 features, 2^12 entries"), std::string::npos) << out;
     EXPECT_NE(out.find("training   100 steps"), std::string::npos) << out;
@@ -88,8 +90,8 @@ TEST_F(EvalViewCli, InfoDescribesAModel) {
     const size_t at = out.find("training world (");
     ASSERT_NE(at, std::string::npos) << out;
     float lo[3], hi[3];
-    ASSERT_EQ(std::sscanf(out.c_str() + at, "training world (%f, %f, %f) .. (%f, %f, %f)", &lo[0], &lo[1], &lo[2],
-                          &hi[0], &hi[1], &hi[2]),
+    ASSERT_EQ(std::sscanf(out.c_str() + at, "training world (%f, %f, %f) .. (%f, %f, %f)", &lo[0], &lo[1],
+                          &lo[2], &hi[0], &hi[1], &hi[2]),
               6)
         << out;
     const float expect_lo[3] = {0.0947f, -0.6629f, 0.0947f}, expect_hi[3] = {0.6629f, -0.0947f, 0.6629f};
@@ -155,6 +157,96 @@ TEST_F(EvalViewCli, EvalNumbersAndFiles) {
     EXPECT_NE(every.find("r_0 "), std::string::npos) << every;
     EXPECT_EQ(every.find("r_1 "), std::string::npos) << every;
     EXPECT_NE(every.find("r_2 "), std::string::npos) << every;
+}
+
+// --masks: the sphere set's own RGBA frames are masks (their alpha is the objects' coverage), so the test
+// folder serves as DIR. The numbers are score_mask's for the render's alpha (this 100-step model is crude:
+// IoU about 0.05, only in range); the model's own alpha maps (--alpha) as masks score a perfect IoU and F.
+TEST_F(EvalViewCli, EvalMasksAndAlpha) {
+    const fs::path out = dir() / "masks_eval";
+    const std::string model = (dir() / "m.npt").string();
+    ASSERT_EQ(run_cli({"eval", model, test_json().string(), "--masks", (dir() / "test").string(), "--alpha",
+                       "-o", out.string(), "-q"},
+                      dir() / "eval.log"),
+              0)
+        << slurp(dir() / "eval.log");
+    const std::string log = slurp(dir() / "eval.log");
+    EXPECT_NE(log.find("iou "), std::string::npos) << log;
+    EXPECT_NE(log.find("leak "), std::string::npos) << log;
+    const nlohmann::json m = nlohmann::json::parse(slurp(out / "metrics.json"));
+    EXPECT_EQ(m.at("boundary_tolerance_px"), 1);
+    const NerfModel nm = load_model(dir() / "m.npt");
+    const Dataset test = load_dataset(test_json(), "");
+    double sum_iou = 0;
+    for (size_t k = 0; k < 3; ++k) {
+        const nlohmann::json& e = m.at("images")[k].at("mask");
+        const Image render = render_view(nm, test.cameras[k], {});
+        Coverage alpha{32, 32, std::vector<float>(32 * 32)};
+        for (size_t p = 0; p < alpha.values.size(); ++p) alpha.values[p] = render.pixels[p * 4 + 3];
+        const Mask truth = threshold_coverage(read_coverage(test.image_files[k]));
+        const MaskScores want = score_mask(alpha, truth);
+        EXPECT_DOUBLE_EQ(e.at("iou").get<double>(), want.iou) << k;
+        EXPECT_DOUBLE_EQ(e.at("boundary_f").get<double>(), want.boundary.f) << k;
+        EXPECT_DOUBLE_EQ(e.at("leak").get<double>(), want.leak) << k;
+        for (double v : {want.iou, want.boundary.f, want.leak}) {
+            EXPECT_GE(v, 0.0) << k;
+            EXPECT_LE(v, 1.0) << k;
+        }
+        sum_iou += want.iou;
+        const Image png = read_image(out / ("r_" + std::to_string(k) + "_alpha.png"), /*srgb=*/false);
+        ASSERT_EQ(png.width, 32);
+        float worst = 0;
+        for (size_t p = 0; p < alpha.values.size(); ++p)
+            worst = std::max(worst, std::abs(png.pixels[p * 3] - alpha.values[p]));
+        EXPECT_LE(worst, 0.5f / 255.0f + 1e-5f) << k;
+    }
+    EXPECT_NEAR(m.at("mean").at("mask").at("iou").get<double>(), sum_iou / 3, 1e-12);
+
+    const fs::path own = dir() / "own_alpha";
+    fs::create_directories(own);
+    for (int k = 0; k < 3; ++k)
+        fs::copy_file(out / ("r_" + std::to_string(k) + "_alpha.png"),
+                      own / ("r_" + std::to_string(k) + ".png"));
+    ASSERT_EQ(
+        run_cli({"eval", model, test_json().string(), "--masks", own.string(), "-q"}, dir() / "own.log"), 0)
+        << slurp(dir() / "own.log");
+    EXPECT_NE(slurp(dir() / "own.log").find("iou 1.0000  bf 1.0000"), std::string::npos)
+        << slurp(dir() / "own.log");
+
+    // A missing mask: one line naming the file, before any render is written.
+    const fs::path masks = dir() / "masks";
+    fs::create_directories(masks);
+    fs::copy_file(dir() / "test" / "r_0.png", masks / "r_0.png");
+    fs::copy_file(dir() / "test" / "r_2.png", masks / "r_2.png");
+    const fs::path bad_out = dir() / "bad_eval";
+    EXPECT_EQ(run_cli({"eval", model, test_json().string(), "--masks", masks.string(), "-o", bad_out.string(),
+                       "-q"},
+                      dir() / "missing.log"),
+              1);
+    std::string err = slurp(dir() / "missing.log");
+    EXPECT_NE(err.find((masks / "r_1.png").string() + ": not found"), std::string::npos) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    EXPECT_FALSE(fs::exists(bad_out / "r_0.png"));
+    EXPECT_FALSE(fs::exists(bad_out / "metrics.json"));
+    // The wrong size, and a file that is no PNG.
+    write_png(masks / "r_1.png", Image(16, 16));
+    EXPECT_EQ(run_cli({"eval", model, test_json().string(), "--masks", masks.string()}, dir() / "size.log"),
+              1);
+    err = slurp(dir() / "size.log");
+    EXPECT_NE(err.find("r_1.png: mask is 16x16, the view (r_1.png) is 32x32"), std::string::npos) << err;
+    test::write_file(masks / "r_1.png", "no png");
+    EXPECT_EQ(
+        run_cli({"eval", model, test_json().string(), "--masks", masks.string(), "-q"}, dir() / "bad.log"),
+        1);
+    err = slurp(dir() / "bad.log");
+    EXPECT_NE(err.find("r_1.png: not a readable image"), std::string::npos) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+    // A missing folder; --alpha without -o has nowhere to write.
+    EXPECT_EQ(run_cli({"eval", model, test_json().string(), "--masks", (dir() / "nope").string()},
+                      dir() / "nodir.log"),
+              1);
+    EXPECT_NE(slurp(dir() / "nodir.log").find("nope"), std::string::npos) << slurp(dir() / "nodir.log");
+    EXPECT_EQ(run_cli({"eval", model, test_json().string(), "--alpha"}, dir() / "alpha.log"), 2);
 }
 
 TEST_F(EvalViewCli, ViewCameraMatchesTheRender) {
