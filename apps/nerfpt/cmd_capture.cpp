@@ -163,10 +163,12 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
                   "train: also fit albedo, roughness and normals and estimate the capture light, so that scenes "
                   "light the object with their own lights (nerfpt train --relightable; docs/relighting.md). Added "
                   "to a capture trained without it, it runs only that stage");
-    cmd->add_option("--relight-steps", args.relight_steps, "train: optimiser steps of the relight stage (default: 1500)")
+    cmd->add_option("--relight-steps", args.relight_steps,
+                    fmt::format("train: optimiser steps of the relight stage (default: {})", args.relight_steps))
         ->check(CLI::Range(uint64_t(1), uint64_t(10000000)));
     cmd->add_option("--relight-points", args.relight_points,
-                    "train: surface points of the relight stage (default: 262144 on a GPU, 32768 on the CPU)")
+                    fmt::format("train: surface points of the relight stage (default: {} on a GPU, {} on the CPU)",
+                                k_relight_points_gpu, k_relight_points_cpu))
         ->check(CLI::Range(64, 1 << 22));
     cmd->add_option("--turntable-frames", args.turntable_frames, "Frames of the turntable video (0: none)")
         ->check(CLI::Range(0, 100000))
@@ -349,8 +351,8 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         t.resume = resume;
         t.resume_hint = continue_hint;
         t.relightable = args.relightable;
-        t.relight_steps = args.relight_steps;
-        t.relight_points = args.relight_points;
+        t.relight.steps = args.relight_steps;
+        t.relight.points = args.relight_points;
         const int rc = run_train(t, global, interrupts);
         if (rc != 0) return rc;
         trained = true;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common.h"
+#include "relight_stage.h"
 
 namespace npt::cli {
 
@@ -26,8 +27,8 @@ struct CaptureArgs {
     double min_registered = 0.5;
     // object
     bool relightable = false;  // train: the relight stage after the NeRF (nerfpt train --relightable)
-    uint64_t relight_steps = 1500;
-    int relight_points = 0;  // 0: nerfpt train's default for the backend
+    uint64_t relight_steps = RelightStageOptions{}.steps;
+    int relight_points = 0;  // 0: the relight stage's default for the backend
     double height_m = 0;  // the object's real height in metres; 0: the object frame stays in capture units
     // split, train, eval
     int holdout_every = 8;  // 0: train on every frame, no held-out PSNR

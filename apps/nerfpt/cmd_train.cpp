@@ -66,25 +66,32 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
     cmd->add_flag("--relightable", args.relightable,
                   "After training, fit albedo, roughness and normals and estimate the capture light, so that "
                   "renders light the object with the scene's lights (with --resume: adds them to a trained model)");
-    cmd->add_option("--relight-steps", args.relight_steps, "Optimiser steps of the relight stage (default: 1500)")
+    cmd->add_option("--relight-steps", args.relight.steps,
+                    fmt::format("Optimiser steps of the relight stage (default: {})", args.relight.steps))
         ->check(CLI::Range(uint64_t(1), uint64_t(10000000)));
-    cmd->add_option("--relight-points", args.relight_points,
-                    "Surface points the relight stage fits, one per training ray that hits the object "
-                    "(default: 262144 on a GPU, 32768 on the CPU)")
+    cmd->add_option("--relight-points", args.relight.points,
+                    fmt::format("Surface points the relight stage fits, one per training ray that hits the object "
+                                "(default: {} on a GPU, {} on the CPU)",
+                                k_relight_points_gpu, k_relight_points_cpu))
         ->check(CLI::Range(64, 1 << 22));
-    cmd->add_option("--relight-directions", args.relight_directions,
-                    "Light directions per surface point (visibility and indirect light toward each; default: 16)")
+    cmd->add_option("--relight-directions", args.relight.directions,
+                    fmt::format("Light directions per surface point (visibility and indirect light toward each; "
+                                "default: {})",
+                                args.relight.directions))
         ->check(CLI::Range(4, 1024));
     cmd->add_option("--relight-normals", args.relight_normals,
                     "The surface normal the stage shades with and the normal field learns: 'depth' (crossed "
                     "expected-depth stencil around the pixel, the default) or 'density' (-grad log sigma)")
         ->check(CLI::IsMember({"depth", "density"}));
-    cmd->add_option("--relight-batch", args.relight_batch,
-                    "Surface points per optimiser step (default: 4096 on a GPU, 1024 on the CPU)")
+    cmd->add_option("--relight-batch", args.relight.batch,
+                    fmt::format("Surface points per optimiser step (default: {} on a GPU, {} on the CPU)",
+                                k_relight_batch_gpu, k_relight_batch_cpu))
         ->check(CLI::Range(16, 1 << 20));
-    cmd->add_option("--relight-normal-smoothing", args.relight_smoothing,
-                    "Radius (model units, the unit cube) over which the surface normals are averaged, edges kept: "
-                    "removes the small bumps a NeRF carves into its density (default: 0.02; 0 turns it off)")
+    cmd->add_option("--relight-normal-smoothing", args.relight.normal_smoothing,
+                    fmt::format("Radius (model units, the unit cube) over which the surface normals are averaged, "
+                                "edges kept: removes the small bumps a NeRF carves into its density (default: {}; "
+                                "0 turns it off)",
+                                args.relight.normal_smoothing))
         ->check(CLI::Range(0.0f, 0.5f));
     cmd->add_flag("--resume", args.resume, "Continue training the model in --output where it stopped");
     cmd->add_flag("--force", args.force, "Overwrite --output if it exists (without --resume)")
@@ -214,15 +221,7 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     if (args.relightable && !interrupted) {
         save();  // the NeRF is safe on disk before the relight stage starts
         trainer.sync_model();
-        RelightStageOptions ro;
-        ro.steps = args.relight_steps;
-        const bool gpu = backend != nerf::Backend::cpu;
-        // Measured on dev (docs/benchmarks.md, issue 24): 16x more points at a quarter of the directions buys
-        // 2 dB of albedo on the GPU for 6 s more; the CPU default keeps the gather to minutes on 2 cores.
-        ro.points = args.relight_points ? args.relight_points : (gpu ? 262144 : 32768);
-        ro.directions = args.relight_directions;
-        ro.batch = args.relight_batch ? args.relight_batch : (gpu ? 4096 : 1024);
-        ro.normal_smoothing = args.relight_smoothing;
+        RelightStageOptions ro = args.relight;
         ro.normals = args.relight_normals == "density" ? nerf::NormalEstimator::density
                                                        : nerf::NormalEstimator::depth_stencil;
         ro.quiet = global.quiet;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common.h"
+#include "relight_stage.h"
 
 namespace npt::cli {
 
@@ -23,11 +24,7 @@ struct TrainArgs {
     int checkpoint_every = 0;  // 0: the config's
     bool resume = false;
     bool relightable = false;        // run the relight stage after training (relight_stage.h)
-    uint64_t relight_steps = 1500;
-    int relight_points = 0;      // 0: the backend's default (relight_stage.h)
-    int relight_directions = 16;
-    int relight_batch = 0;       // 0: the backend's default
-    float relight_smoothing = 0.02f;
+    RelightStageOptions relight;  // --relight-*; steps, points and batch of 0 are the stage's defaults
     std::string relight_normals = "depth";  // depth | density (nerf::NormalEstimator)
     bool force = false;
     // The command that continues after an interrupt, printed then; empty: this train command with --resume.

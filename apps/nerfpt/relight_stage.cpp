@@ -19,8 +19,9 @@ namespace npt::cli {
 bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const RelightStageOptions& options,
                        InterruptGuard& interrupts) {
     const auto t0 = std::chrono::steady_clock::now();
+    const bool gpu = options.backend != nerf::Backend::cpu;
     nerf::RelightSampleSettings ss;
-    ss.points = options.points;
+    ss.points = options.points ? options.points : (gpu ? k_relight_points_gpu : k_relight_points_cpu);
     ss.directions = options.directions;
     ss.normals = options.normals;
     ss.normal_smoothing = options.normal_smoothing;
@@ -40,7 +41,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
 
     nerf::RelightTrainSettings ts;
     ts.seed = model.config.training.seed;
-    ts.batch = options.batch;
+    ts.batch = options.batch ? options.batch : (gpu ? k_relight_batch_gpu : k_relight_batch_cpu);
     nerf::RelightTrainer trainer(model, data.cameras.size(), samples, ts);
     nerf::RelightStepStats st;
     while (trainer.steps_done() < options.steps) {

@@ -14,13 +14,19 @@ namespace npt::cli {
 
 class InterruptGuard;
 
+// The defaults of points and batch per backend. Measured on dev (docs/benchmarks.md, issue 24): 16x more points
+// at a quarter of the directions buys 2 dB of albedo on the GPU for 6 s more; the CPU's keep the gather to
+// minutes on 2 cores.
+constexpr int k_relight_points_gpu = 262144, k_relight_points_cpu = 32768;
+constexpr int k_relight_batch_gpu = 4096, k_relight_batch_cpu = 1024;
+
 struct RelightStageOptions {
     uint64_t steps = 1500;  // optimiser steps of the stage
-    int points = 16384;
-    int directions = 16;
-    nerf::NormalEstimator normals = nerf::NormalEstimator::depth_stencil;
-    int batch = 1024;              // points per optimiser step
-    float normal_smoothing = 0.02f;  // nerf::RelightSampleSettings::normal_smoothing
+    int points = 0;         // surface points; 0: k_relight_points_* of the backend
+    int batch = 0;          // points per optimiser step; 0: k_relight_batch_* of the backend
+    int directions = nerf::RelightSampleSettings{}.directions;
+    nerf::NormalEstimator normals = nerf::RelightSampleSettings{}.normals;
+    float normal_smoothing = nerf::RelightSampleSettings{}.normal_smoothing;
     bool quiet = false;
     nerf::Backend backend = nerf::Backend::cpu;  // where the NeRF is evaluated while gathering surface points
 };

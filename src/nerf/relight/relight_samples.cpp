@@ -88,13 +88,20 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
             toward.push_back(pending[i].wo);
             pixels.push_back(pending[i].pixel);
         }
-        std::vector<Vec3> normal = density_normals(query, at, toward, settings.normal_step);
-        if (settings.normals == NormalEstimator::depth_stencil) {
-            const std::vector<Vec3> stencil =
-                depth_stencil_normals(model, query, data.cameras, pixels, settings.normal_pixels);
-            for (size_t h = 0; h < hit.size(); ++h)
-                if (dot(stencil[h], stencil[h]) > 0.0f) normal[h] = stencil[h];
-        }
+        // The stencil's where it has one; the density normal for the rest (all of them under `density`).
+        std::vector<Vec3> normal(hit.size(), Vec3(0.0f));
+        if (settings.normals == NormalEstimator::depth_stencil)
+            normal = depth_stencil_normals(model, query, data.cameras, pixels, settings.normal_pixels);
+        std::vector<size_t> missing;
+        std::vector<Vec3> missing_at, missing_toward;
+        for (size_t h = 0; h < hit.size(); ++h)
+            if (!(dot(normal[h], normal[h]) > 0.0f)) {
+                missing.push_back(h);
+                missing_at.push_back(at[h]);
+                missing_toward.push_back(toward[h]);
+            }
+        const std::vector<Vec3> fallback = density_normals(query, missing_at, missing_toward, settings.normal_step);
+        for (size_t m = 0; m < missing.size(); ++m) normal[missing[m]] = fallback[m];
         for (size_t h = 0; h < hit.size(); ++h) {
             if (!(dot(normal[h], normal[h]) > 0.0f)) continue;
             Point p = pending[hit[h]];
