@@ -8,6 +8,8 @@
 # Options by variable: SPP (relit views, default 64), ROOM_SPP (default 1024), BACKEND (cpu|optix, default the
 # renderer's own choice), VIEWS (default all 20), SHADING (relit or emissive: the volume's "shading", default the
 # model's own). Then: score.py DATA PRED.
+# The skies are the linear ones of lights.json's stops (bench/relight_skies.py: the dev set's env.exr files are
+# sRGB-encoded, not the sky Cycles rendered the truth with).
 set -euo pipefail
 mode=${1:-render}
 [[ $mode == render ]] || { echo "usage: relight_dev.sh render (with BIN MODEL DATA PRED set)" >&2; exit 2; }
@@ -19,6 +21,10 @@ model=$(realpath "$MODEL")
 data=$(realpath "$DATA")
 scenes=$(mktemp -d)
 trap 'rm -rf "$scenes"' EXIT
+py=$(command -v /usr/bin/python3 || command -v python3)  # the system one: numpy (a pyenv one may lack it)
+"$py" -c 'import OpenImageIO' 2>/dev/null ||
+    export PYTHONPATH="$(realpath "$(dirname "$0")/../scripts/exr_shim")${PYTHONPATH:+:$PYTHONPATH}"
+"$py" "$(dirname "$0")/relight_skies.py" "$data" "$scenes/skies"
 python3 - "$data" "$model" "$scenes" "${VIEWS:-}" "${SHADING:-}" <<'PY'
 import json, os, sys
 data, model, out, views, shading = sys.argv[1:6]
@@ -34,13 +40,13 @@ for light in ("sunset", "studio"):
         scene = {"include": [os.path.join(data, "lights", light, "scene.gltf")],
                  "camera": {"position": cam["position"], "look_at": cam["look_at"], "up": cam["up"],
                             "yfov_deg": cam["yfov_deg"]},
-                 "environment": {"file": os.path.join(data, "lights", light, "env.exr"), "strength": 1.0},
+                 "environment": {"file": os.path.join(out, "skies", light + ".exr"), "strength": 1.0},
                  "volumes": [volume],
                  "render": {"width": 400, "height": 400, "spp": 64, "max_depth": 8}}
         json.dump(scene, open(os.path.join(out, "%s_%d.json" % (light, k)), "w"), indent=1)
 room = json.load(open(os.path.join(data, "scene", "scene.json")))
 room["include"] = [os.path.join(data, "scene", f) for f in room["include"]]
-room["environment"]["file"] = os.path.join(data, "scene", room["environment"]["file"])
+room["environment"]["file"] = os.path.join(out, "skies", "room.exr")
 for v in room["volumes"]:
     v["file"] = model
     if shading:
