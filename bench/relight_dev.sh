@@ -21,7 +21,8 @@ model=$(realpath "$MODEL")
 data=$(realpath "$DATA")
 scenes=$(mktemp -d)
 trap 'rm -rf "$scenes"' EXIT
-py=$(command -v /usr/bin/python3 || command -v python3)  # the system one: numpy (a pyenv one may lack it)
+py=python3  # one with numpy (a pyenv shim here may lack it, the system one there)
+for p in python3 /usr/bin/python3; do "$p" -c 'import numpy' 2>/dev/null && { py=$p; break; }; done
 "$py" -c 'import OpenImageIO' 2>/dev/null ||
     export PYTHONPATH="$(realpath "$(dirname "$0")/../scripts/exr_shim")${PYTHONPATH:+:$PYTHONPATH}"
 "$py" "$(dirname "$0")/relight_skies.py" "$data" "$scenes/skies"

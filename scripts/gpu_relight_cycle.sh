@@ -92,4 +92,13 @@ for name, f in (('albedo', 'aov/albedo_%d.exr'), ('normal', 'aov/normal_%d.exr')
         tiles.append((im * 255).astype(np.uint8)[..., ::-1])  # RGB -> cv2's BGR
     if len(tiles) == 3: rows.append(np.concatenate(tiles, 1))
 if rows: cv2.imwrite(os.path.join(out, 'relight_views.png'), np.concatenate(rows, 0))
+# The room: Cycles' reference | nerfpt's render | 4 x |difference|, and the render itself for a closer look.
+room = os.path.join(pred, 'scene', 'render.exr')
+if os.path.exists(room):
+    ref = read(os.path.join(os.environ.get('DATA', '.gpu/relight/dev'), 'scene', 'reference.exr'))[..., :3]
+    r = read(room)[..., :3]
+    tiles = [ref, r, 4 * np.abs(r - ref)]
+    strip = np.concatenate([(np.clip(t, 0, 1) ** (1 / 2.2) * 255).astype(np.uint8)[..., ::-1] for t in tiles], 1)
+    cv2.imwrite(os.path.join(out, 'room.png'), strip)
+    with open(room, 'rb') as f, open(os.path.join(out, 'room_render.exr'), 'wb') as g: g.write(f.read())
 PY

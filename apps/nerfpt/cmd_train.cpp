@@ -79,6 +79,12 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                                 "default: {})",
                                 args.relight.directions))
         ->check(CLI::Range(4, 1024));
+    cmd->add_option("--relight-event-draws", args.relight.event_draws,
+                    fmt::format("Events drawn per surface point along its camera ray, as the renderer draws them; "
+                                "the fit queries the fields at one of them each time (1: a single fixed point, "
+                                "which the fine levels memorise; default: {})",
+                                args.relight.event_draws))
+        ->check(CLI::Range(1, 64));
     cmd->add_option("--relight-normals", args.relight_normals,
                     "The surface normal the stage shades with and the normal field learns: 'depth' (crossed "
                     "expected-depth stencil around the pixel, the default) or 'density' (-grad log sigma)")

@@ -23,6 +23,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     nerf::RelightSampleSettings ss;
     ss.points = options.points ? options.points : (gpu ? k_relight_points_gpu : k_relight_points_cpu);
     ss.directions = options.directions;
+    ss.event_draws = options.event_draws;
     ss.normals = options.normals;
     ss.normal_smoothing = options.normal_smoothing;
     ss.seed = model.config.training.seed;

@@ -25,6 +25,7 @@ struct RelightStageOptions {
     int points = 0;         // surface points; 0: k_relight_points_* of the backend
     int batch = 0;          // points per optimiser step; 0: k_relight_batch_* of the backend
     int directions = nerf::RelightSampleSettings{}.directions;
+    int event_draws = nerf::RelightSampleSettings{}.event_draws;
     nerf::NormalEstimator normals = nerf::RelightSampleSettings{}.normals;
     float normal_smoothing = nerf::RelightSampleSettings{}.normal_smoothing;
     bool quiet = false;

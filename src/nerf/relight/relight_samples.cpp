@@ -27,15 +27,42 @@ struct Point {
     Rgb target;
     uint32_t image = 0;
     PixelRef pixel;
+    Ray ray;  // model space: the camera ray the event was drawn on
 };
+
+// Draws 2..D of each found point's event: its camera ray marched again with a new lattice offset and target
+// depth (a ray that finds no event this time keeps the first draw there).
+void draw_more_events(const NerfModel& model, FieldQuery& query, const std::vector<Point>& points,
+                      const std::vector<size_t>& found, std::vector<Pcg32>& rngs, int draws, RelightSamples& out) {
+    const size_t n = found.size(), extra = size_t(draws - 1);
+    out.draws = draws;
+    out.draw.resize(n * size_t(draws));
+    for (size_t j = 0; j < n; ++j) out.draw[j * draws] = out.position[j];
+    if (extra == 0) return;
+    std::vector<WaveRay> rays(n * extra);
+    for (size_t j = 0; j < n; ++j)
+        for (size_t m = 0; m < extra; ++m) {
+            Pcg32& rng = rngs[found[j]];
+            WaveRay& r = rays[j * extra + m];
+            r.ray = points[found[j]].ray;
+            r.jitter = rng.next_float();
+            r.tau_target = -std::log1p(-std::min(rng.next_float(), 0.999999f));
+        }
+    march_wavefront(model, query, rays, WaveMode::event);
+    for (size_t j = 0; j < n; ++j)
+        for (size_t m = 0; m < extra; ++m) {
+            const WaveRay& r = rays[j * extra + m];
+            out.draw[j * draws + 1 + m] = r.has_event ? r.event_position : out.position[j];
+        }
+}
 
 }  // namespace
 
 RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& data, FieldQuery& query,
                                       const RelightSampleSettings& settings, const RelightProgressFn& progress) {
     if (data.cameras.empty()) throw Error("the relight stage needs training images; the data set has none");
-    if (settings.points < 1 || settings.directions < 1)
-        throw Error("relight: points and directions must be at least 1");
+    if (settings.points < 1 || settings.directions < 1 || settings.event_draws < 1)
+        throw Error("relight: points, directions and event draws must be at least 1");
     const size_t n_points = size_t(settings.points);
     const int K = settings.directions;
     const Mat4& w2m = model.world_to_model;
@@ -72,6 +99,7 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
             p.image = img;
             p.pixel = PixelRef{img, px, py, jitter};
             p.wo = -r.ray.d;
+            p.ray = r.ray;
             p.target = Rgb(srgb_to_linear(pix[0] / 255.0f), srgb_to_linear(pix[1] / 255.0f),
                            srgb_to_linear(pix[2] / 255.0f));
             pending.push_back(p);
@@ -144,6 +172,7 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
         out.target[j] = p.target;
         out.image[j] = p.image;
     }
+    draw_more_events(model, query, points, found, rngs, settings.event_draws, out);
     out.normal = smooth_normals(out.position, out.normal, settings.normal_smoothing);
     for (size_t j = 0; j < n; ++j)  // smoothing may turn a normal past the horizon of its own view
         if (dot(out.normal[j], out.wo[j]) < 0.0f) out.normal[j] = points[found[j]].normal;

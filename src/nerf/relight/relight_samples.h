@@ -31,13 +31,19 @@ struct RelightSampleSettings {
     float normal_pixels = 2.0f;   // the depth stencil's half width in pixels
     float normal_smoothing = 0.02f;  // model units: radius of smooth_normals over the points (0: off)
     float min_alpha = 0.99f;      // pixels more transparent than this in the image are not used
+    // Events drawn per point on its camera ray: the fit queries the intrinsic fields at one of them each time
+    // it uses the point. The renderer's events spread over the depth of the surface; fitted at a single draw
+    // per ray, the hash grid's fine levels memorise those positions and return noise between them.
+    int event_draws = 4;
     uint64_t seed = 1;
 };
 
 struct RelightSamples {
     int directions = 0;
     // Per point, model space.
-    std::vector<Vec3> position;  // the scattering event
+    std::vector<Vec3> position;  // the scattering event (shaded: normal, visibility and indirect light are its)
+    int draws = 1;               // events drawn per point (settings.event_draws)
+    std::vector<Vec3> draw;      // [point * draws + m]: where the fields are queried; m = 0 is `position`
     std::vector<Vec3> wo;        // unit direction toward the camera
     std::vector<Vec3> normal;    // the surface normal (settings.normals), unit, turned toward wo
     std::vector<Rgb> target;     // the pixel's colour, linear
@@ -48,6 +54,11 @@ struct RelightSamples {
     std::vector<Rgb> indirect;      // linear radiance arriving along -dir from the model itself
 
     size_t size() const { return position.size(); }
+    // Draw m (taken modulo draws) of point s; `position` when the samples carry no draws.
+    Vec3 draw_position(size_t s, uint32_t m) const {
+        return draws > 1 && draw.size() == position.size() * size_t(draws) ? draw[s * size_t(draws) + m % uint32_t(draws)]
+                                                                            : position[s];
+    }
 };
 
 // Called with (points done, points wanted); from worker threads, never two calls at once.

@@ -115,8 +115,12 @@ RelightStepStats RelightTrainer::compute_gradient() {
     const float* params = m_params.data();
 
     std::vector<uint32_t> pick(batch);
+    std::vector<Vec3> at(batch);  // where each picked point's fields are queried: one of its event draws
     Pcg32 rng(mix64(m_settings.seed ^ 0x62617463ULL), step);
-    for (auto& p : pick) p = rng.next_u32() % uint32_t(S.size());
+    for (size_t i = 0; i < batch; ++i) {
+        pick[i] = rng.next_u32() % uint32_t(S.size());
+        at[i] = S.draw_position(pick[i], rng.next_u32());
+    }
     std::vector<Rgb> env(n_env);
     for (size_t t = 0; t < n_env; ++t)
         env[t] = Rgb(std::exp(params[m_env_offset + 3 * t]), std::exp(params[m_env_offset + 3 * t + 1]),
@@ -148,7 +152,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
         ch.d_exposure.assign(m_images, 0.0f);
         for (size_t i = 0; i < n; ++i)
             hash_encode(m_layout.grid, levels, params + m_layout.grid_offset,
-                        m_layout.grid_position(S.position[pick[b + i]]), &ch.enc[i * dims]);
+                        m_layout.grid_position(at[b + i]), &ch.enc[i * dims]);
         mlp_forward_batch(shape, params + m_layout.mlp_offset, ch.enc.data(), n, ch.out.data(), &ch.acts);
         std::vector<Rgb> lin(static_cast<size_t>(K));
         std::vector<float> wk(static_cast<size_t>(K));
@@ -250,7 +254,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
             for (size_t i = 0; i < m_images; ++i) grads[m_exposure_offset + i] += ch.d_exposure[i];
         const size_t b = c * k_chunk, n = std::min(k_chunk, batch - b);
         for (size_t i = 0; i < n; ++i)
-            hash_encode_backward(m_layout.grid, m_layout.grid_position(S.position[pick[b + i]]), &ch.d_enc[i * dims],
+            hash_encode_backward(m_layout.grid, m_layout.grid_position(at[b + i]), &ch.d_enc[i * dims],
                                  grads + m_layout.grid_offset);
         stats.loss += ch.loss;
         stats.mse += ch.se;
