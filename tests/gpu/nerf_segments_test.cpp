@@ -59,9 +59,9 @@ void expect_pass_matches_cpu(const gpu::NerfPassTuning& tuning, const char* what
         gpu::WavefrontPath& p = paths[i];
         p.phase = gpu::PathPhase::Scatter;
         media::VolumeResult inline_result;
-        const bool q =
-            gpu::volume_segment({host.data(), host.size()}, slot_of_volume, ray, 0.0f, t_end, xi,
-                                kind[i] == 1, &queries[2 * size_t(i) + size_t(kind[i])], &inline_result);
+        const bool q = gpu::volume_segment({host.data(), host.size()}, slot_of_volume, ray, 0.0f, t_end, xi,
+                                           kind[i] == 1, &queries[2 * size_t(i) + size_t(kind[i])],
+                                           &inline_result) != gpu::SegmentRoute::Inline;
         queued += q ? 1 : 0;
         // A segment that misses the cube is not queued and is empty.
         if (!q) {

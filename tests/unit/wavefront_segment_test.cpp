@@ -71,8 +71,8 @@ TEST(WavefrontSegment, AQueuedNerfSegmentMarchesToTheIntegratorsResult) {
         const bool shadow = i % 4 == 0;
         gpu::NerfQuery q;
         media::VolumeResult inline_result;
-        const bool deferred =
-            gpu::volume_segment({volumes, 1}, slots, ray, 0.0f, t_end, xi, shadow, &q, &inline_result);
+        const bool deferred = gpu::volume_segment({volumes, 1}, slots, ray, 0.0f, t_end, xi, shadow, &q,
+                                                  &inline_result) == gpu::SegmentRoute::Queued;
         const media::VolumeResult expected = media::integrate_volumes({volumes, 1}, ray, 0.0f, t_end, xi, shadow);
         if (!deferred) {  // missed the cube: nothing there
             EXPECT_EQ(q.slot, gpu::k_no_query);
@@ -112,14 +112,16 @@ TEST(WavefrontSegment, OtherSegmentsAreIntegratedInPlace) {
     gpu::NerfQuery q;
     media::VolumeResult r;
 
-    EXPECT_FALSE(gpu::volume_segment({&f.nerf_volume, 1}, no_slot, ray, 0.0f, INFINITY, 0.3f, false, &q, &r));
+    EXPECT_EQ(gpu::volume_segment({&f.nerf_volume, 1}, no_slot, ray, 0.0f, INFINITY, 0.3f, false, &q, &r),
+              gpu::SegmentRoute::Inline);
     media::VolumeResult e = media::integrate_volumes({&f.nerf_volume, 1}, ray, 0.0f, INFINITY, 0.3f, false);
     EXPECT_EQ(q.slot, gpu::k_no_query);
     EXPECT_LT(e.transmittance, 0.99f);
     EXPECT_EQ(r.transmittance, e.transmittance);
     EXPECT_EQ(r.radiance.x, e.radiance.x);
 
-    EXPECT_FALSE(gpu::volume_segment({both, 2}, slots, ray, 0.0f, INFINITY, 0.3f, false, &q, &r));
+    EXPECT_EQ(gpu::volume_segment({both, 2}, slots, ray, 0.0f, INFINITY, 0.3f, false, &q, &r),
+              gpu::SegmentRoute::Inline);
     e = media::integrate_volumes({both, 2}, ray, 0.0f, INFINITY, 0.3f, false);
     EXPECT_EQ(q.slot, gpu::k_no_query);
     EXPECT_EQ(r.transmittance, e.transmittance);

@@ -145,6 +145,23 @@ void render_field_fp16(const NerfLayout& layout, const float* params, const __ha
     mlp_inference(a, false, s);
 }
 
+void render_density_fp16(const NerfLayout& layout, const float* params, const __half* mlp_half,
+                         const RenderSlots& slots, uint32_t capacity, __half* encoded, float* sigma, cudaStream_t s) {
+    HashGridArgs h;
+    h.layout = layout;
+    h.positions = slots.pos;
+    h.count = slots.count;
+    h.capacity = capacity;
+    hash_encode(h, params + layout.grid_offset, encoded, s);
+    MlpInferenceArgs a;
+    a.weights = mlp_half;
+    a.encoded = encoded;
+    a.count = slots.count;
+    a.capacity = capacity;
+    a.sigma = sigma;
+    mlp_inference(a, true, s);
+}
+
 void render_composite(const RenderFrame& f, const uint32_t* alive, uint32_t n, int k, RenderSlots slots,
                       const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s) {
     if (n == 0) return;

@@ -68,6 +68,9 @@ inline uint32_t field_rows(uint64_t most, uint32_t capacity) {
 void render_field_fp16(const NerfLayout& layout, const float* params, const __half* mlp_half,
                        const RenderSlots& slots, const Vec3* dirs, uint32_t capacity, __half* encoded, float* sigma,
                        Rgb* rgb, cudaStream_t s);
+// The same evaluation for the density alone (the colour MLP skipped; sigma as render_field_fp16 gives it).
+void render_density_fp16(const NerfLayout& layout, const float* params, const __half* mlp_half,
+                         const RenderSlots& slots, uint32_t capacity, __half* encoded, float* sigma, cudaStream_t s);
 // Composites the round's samples; rays that go on are appended to next (count in *next_count, zero before).
 void render_composite(const RenderFrame& f, const uint32_t* alive, uint32_t n, int k, RenderSlots slots,
                       const float* sigma, const Rgb* rgb, uint32_t* next, uint32_t* next_count, cudaStream_t s);

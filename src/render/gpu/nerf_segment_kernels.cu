@@ -21,6 +21,77 @@ __device__ __forceinline__ void write_result(const PathStore& paths, uint32_t it
         store_shadow_transmittance(paths, segment_path(item), transmittance);
 }
 
+// A relit model's radiance segment is a free flight (volume_segment's SegmentRoute::Flight); its shadow segments
+// are the emissive kind's attenuation only, which is march_relit_nerf's absorption to the same sample: the same
+// sums of sigma dt, the same cut-off at T < 1e-4.
+__device__ __forceinline__ bool is_flight(const NerfSegmentModel& m, uint32_t item) {
+    return m.relit && segment_kind(item) == 0;
+}
+
+// After a round of a free flight: its event, or no event once the march has ended, is written into its path;
+// true for a flight that goes on (its optical depth kept for the next round).
+__device__ __forceinline__ bool flight_finish_or_keep(const NerfSegmentModel& m, const PathStore& paths,
+                                                      uint32_t item, SegmentState& s, float log_t, bool event,
+                                                      Vec3 p) {
+    if (event) {
+        const float t = flight_event_t(m.march, s.ray, s.cursor.t0, s.t_world, s.world_per_model, p);
+        paths.events[segment_path(item)] = FlightEvent{p, t, m.volume};
+        return false;
+    }
+    if (s.cursor.done(m.march)) {
+        paths.events[segment_path(item)] = FlightEvent{};
+        return false;
+    }
+    s.log_t = log_t;
+    return true;
+}
+
+// FreeFlight::add over a round's samples, in order: each positive sigma dt (sigma times the density scale over
+// the step) is added to the optical depth (-log_t), and the event is the first sample where it reaches the
+// target. Returns that sample's index in the round, or -1.
+__device__ __forceinline__ int flight_step(float& log_t, float target, const float* sigma, const float* dt,
+                                           uint32_t base, int used, float density_scale) {
+    for (int q = 0; q < used; ++q) {
+        const float x = sigma[base + q] * density_scale * dt[base + q];
+        if (!(x > 0.0f)) continue;  // also NaN, as FreeFlight::add
+        log_t -= x;                 // exactly -(tau + x): negation does not round
+        if (-log_t >= target) return q;
+    }
+    return -1;
+}
+
+// flight_step over the round's samples 32 at a time (the warp form): the optical depth at a sample is the
+// state's plus an inclusive prefix sum over the lanes; the event is the first sample with a positive sigma dt
+// where it reaches the target. The same sums as the sequential loop, added in another order. Every lane returns
+// the event's index, or -1.
+__device__ __forceinline__ int warp_flight_step(float& log_t, float target, const float* sigma, const float* dt,
+                                                uint32_t base, int used, float density_scale) {
+    constexpr unsigned all = 0xffffffffu;
+    const int lane = int(threadIdx.x & 31);
+    for (int q0 = 0; q0 < used; q0 += 32) {
+        const int q = q0 + lane;
+        float x = 0.0f;
+        if (q < used) {
+            x = sigma[base + q] * density_scale * dt[base + q];
+            if (!(x > 0.0f)) x = 0.0f;
+        }
+        float through = x;
+#pragma unroll
+        for (int off = 1; off < 32; off <<= 1) {
+            const float o = __shfl_up_sync(all, through, off);
+            if (lane >= off) through += o;
+        }
+        const unsigned hits = __ballot_sync(all, x > 0.0f && -log_t + through >= target);
+        if (hits != 0) {
+            const int first = __ffs(hits) - 1;
+            log_t -= __shfl_sync(all, through, first);
+            return q0 + first;
+        }
+        log_t -= __shfl_sync(all, through, 31);
+    }
+    return -1;
+}
+
 // A segment's compositing where its last round left it.
 __device__ __forceinline__ media::Accumulator resume(const SegmentState& s, uint32_t item) {
     media::Accumulator acc;
@@ -79,13 +150,21 @@ __global__ void __launch_bounds__(k_block)
         mp.t_max = q.t_max;
         SegmentState s;
         s.ray = q.ray;
-        // march_nerf's march (march_ray_visit with the lattice offset xi), clipped to the occupied box, which
-        // leaves its samples as they are (ray_march.h).
+        s.target = q.target;
+        s.t_world = q.t_world;
+        s.world_per_model = q.world_per_model;
+        // march_nerf's (and march_relit's) march (march_ray_visit with the lattice offset xi), clipped to the
+        // occupied box, which leaves its samples as they are (ray_march.h).
         marching = nerf::march_start(mp, m.grid, q.ray, q.xi, &s.cursor) &&
                    nerf::march_clip(mp, q.ray, m.box_min, m.box_max, &s.cursor) && !s.cursor.done(mp);
         states[j] = s;
         dirs[j] = q.ray.d;
-        if (!marching) write_result(paths, list[j], Rgb(0.0f), 1.0f);
+        if (!marching) {
+            if (is_flight(m, list[j]))
+                paths.events[segment_path(list[j])] = FlightEvent{};
+            else
+                write_result(paths, list[j], Rgb(0.0f), 1.0f);
+        }
     }
     warp_append(marching, j, live, live_count);
 }
@@ -115,14 +194,23 @@ __global__ void __launch_bounds__(k_block)
     uint32_t j = 0;
     if (a < n) {
         j = live[a];
-        // media::march_nerf's compositing, sample by sample (volume_integrator.h).
-        media::Accumulator acc = resume(states[j], list[j]);
+        const uint32_t item = list[j];
         const uint32_t base = samples.first[a];
         const int used = samples.used[a];
-        for (int q = 0; q < used && !acc.done(); ++q)
-            media::add_nerf_sample(acc, sigma[base + q], rgb[base + q], samples.dt[base + q], m.density_scale,
-                                   m.emission_scale);
-        go_on = finish_or_keep(m, paths, list[j], states[j], acc);
+        if (is_flight(m, item)) {
+            // media::march_relit's free flight, sample by sample (relit_free_flight.h).
+            float log_t = states[j].log_t;
+            const int e = flight_step(log_t, states[j].target, sigma, samples.dt, base, used, m.density_scale);
+            go_on = flight_finish_or_keep(m, paths, item, states[j], log_t, e >= 0,
+                                          e >= 0 ? samples.pos[base + uint32_t(e)] : Vec3(0.0f));
+        } else {
+            // media::march_nerf's compositing, sample by sample (volume_integrator.h).
+            media::Accumulator acc = resume(states[j], item);
+            for (int q = 0; q < used && !acc.done(); ++q)
+                media::add_nerf_sample(acc, sigma[base + q], rgb[base + q], samples.dt[base + q],
+                                       m.density_scale, m.emission_scale);
+            go_on = finish_or_keep(m, paths, item, states[j], acc);
+        }
     }
     warp_append(go_on, j, next, next_count);
 }
@@ -191,6 +279,16 @@ __global__ void __launch_bounds__(k_block)
     if (a >= n) return;  // a whole warp
     const bool leader = (threadIdx.x & 31) == 0;
     const uint32_t j = live[a];
+    if (is_flight(m, list[j])) {
+        float log_t = states[j].log_t;
+        const uint32_t base = samples.first[a];
+        const int e = warp_flight_step(log_t, states[j].target, sigma, samples.dt, base, samples.used[a],
+                                       m.density_scale);
+        if (leader && flight_finish_or_keep(m, paths, list[j], states[j], log_t, e >= 0,
+                                            e >= 0 ? samples.pos[base + uint32_t(e)] : Vec3(0.0f)))
+            next[atomicAdd(next_count, 1u)] = j;
+        return;
+    }
     media::Accumulator acc = resume(states[j], list[j]);
     warp_composite(acc, sigma, rgb, samples.dt, samples.first[a], samples.used[a], m.density_scale,
                    m.emission_scale);

@@ -13,12 +13,17 @@
 
 namespace npt::gpu {
 
-// Where a segment's march stands and what it has gathered (media::Accumulator's radiance and log T).
+// Where a segment's march stands and what it has gathered (media::Accumulator's radiance and log T; for a free
+// flight log T is minus its optical depth so far, FreeFlight::tau). A free flight's target and world-t map are
+// its query's (NerfQuery).
 struct SegmentState {
     Ray ray;
     nerf::MarchCursor cursor;
     float log_t = 0.0f;
     Rgb radiance{0.0f};
+    float target = INFINITY;
+    float t_world = 0.0f;
+    float world_per_model = 0.0f;
 };
 
 // A segment in a list: its path's index and which of the path's queries it is (kind 0: the volume ray, with
@@ -42,15 +47,16 @@ struct SegmentLists {
 void segment_gather(const uint32_t* queue, const uint32_t* active, uint32_t n, uint32_t* next,
                     uint32_t* next_count, const SegmentLists& lists, cudaStream_t s);
 // Starts the march of each of the n segments of `list`; a segment with nothing to march is written back at
-// once (no emission, T = 1), the others go to `live`.
+// once (no emission, T = 1; a free flight without an event), the others go to `live`.
 void segment_start(const NerfSegmentModel& m, const PathStore& paths, const uint32_t* list, uint32_t n,
                    SegmentState* states, Vec3* dirs, uint32_t* live, uint32_t* live_count, cudaStream_t s);
 // Up to k samples for each of the n live segments. by_warp: a warp per segment (uniform steps only, see
 // warp_march_into_slots), for the rounds of a few long segments; the samples are the same.
 void segment_march(const NerfSegmentModel& m, SegmentState* states, const uint32_t* live, uint32_t n, int k,
                    bool by_warp, const nerf::cuda::RenderSlots& samples, cudaStream_t s);
-// Composites the round's samples (by_warp: a warp per segment, as the march); finished segments are written
-// into their paths, the others appended to next.
+// Composites the round's samples (by_warp: a warp per segment, as the march), or, for a relit model's radiance
+// segments, looks for their free flight's event among them; finished segments are written into their paths, the
+// others appended to next.
 void segment_composite(const NerfSegmentModel& m, const PathStore& paths, const uint32_t* list,
                        SegmentState* states, const uint32_t* live, uint32_t n, bool by_warp,
                        const nerf::cuda::RenderSlots& samples, const float* sigma, const Rgb* rgb,

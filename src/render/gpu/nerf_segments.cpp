@@ -98,6 +98,8 @@ NerfSegmentPass::NerfSegmentPass(Span<const media::VolumeView> host, Span<const 
         m.box_max = bits.box_max;
         m.density_scale = v.density_scale;
         m.emission_scale = v.emission_scale;
+        m.relit = v.nerf.relit;
+        m.volume = int32_t(i);
         slot_of[i] = uint32_t(m_models.size());
         m_models.push_back(m);
     }
@@ -194,12 +196,17 @@ void NerfSegmentPass::evaluate(const PathStore& paths, size_t model, uint32_t n)
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / live)));
         cuda_check(cudaMemsetAsync(sample_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
         segment_march(m, b.states.data(), b.live[cur].data(), live, kk, by_warp, samples, m_stream);
-        // With colour for every sample: the shadow segments' colour is not needed, but evaluating both kinds
-        // in the same rounds halves the rounds (and their synchronisations); packing the shadow samples apart
-        // for a density-only evaluation was measured at no gain (docs/benchmarks.md, issue 13).
-        nerf::cuda::render_field_fp16(m.layout, m.params, m.mlp_half, samples, b.dirs.data(),
-                                      nerf::cuda::field_rows(uint64_t(live) * uint64_t(kk), capacity),
-                                      b.encoded.data(), b.sigma.data(), b.rgb.data(), m_stream);
+        // With colour for every sample of an emissive model: the shadow segments' colour is not needed, but
+        // evaluating both kinds in the same rounds halves the rounds (and their synchronisations); packing the
+        // shadow samples apart for a density-only evaluation was measured at no gain (docs/benchmarks.md, issue
+        // 13). A relit model never needs the colour.
+        const uint32_t rows = nerf::cuda::field_rows(uint64_t(live) * uint64_t(kk), capacity);
+        if (m.relit)
+            nerf::cuda::render_density_fp16(m.layout, m.params, m.mlp_half, samples, rows, b.encoded.data(),
+                                            b.sigma.data(), m_stream);
+        else
+            nerf::cuda::render_field_fp16(m.layout, m.params, m.mlp_half, samples, b.dirs.data(), rows,
+                                          b.encoded.data(), b.sigma.data(), b.rgb.data(), m_stream);
         const int nxt = 1 - cur;
         uint32_t* next_count = b.counts.data() + 1 + nxt;
         cuda_check(cudaMemsetAsync(next_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");

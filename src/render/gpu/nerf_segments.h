@@ -2,8 +2,10 @@
 // go on and the NeRF segments they left queued, marches every segment through its model's occupancy grid a
 // few samples per round (the rounds of `nerfpt view`'s GPU renderer), evaluates the samples with the
 // hash-grid kernel and the fused tensor-core MLP (fp16) and composites them exactly as media::march_nerf does
-// (the same samples, lattice offset, scales and stopping point), writing each result back into its path. Host
-// code; the kernels are in nerf_segment_kernels.cu.
+// (the same samples, lattice offset, scales and stopping point), writing each result back into its path. A relit
+// NeRF's samples are evaluated for their density only: its radiance segments are free flights (the first sample
+// where the optical depth reaches the path's target, as media::march_relit finds it), its shadow segments
+// transmittance. Host code; the kernels are in nerf_segment_kernels.cu.
 #pragma once
 
 #include <cuda_fp16.h>
@@ -29,6 +31,8 @@ struct NerfSegmentModel {
     nerf::OccupancyGridView grid;  // bit fields on the device
     Vec3 box_min, box_max;         // around the occupied cells
     float density_scale = 1.0f, emission_scale = 1.0f;
+    bool relit = false;  // radiance segments are free flights (FlightEvent), never emission
+    int32_t volume = -1;  // its index in the scene's volumes (FlightEvent::volume)
 };
 
 // How the pass splits its rounds. The defaults were measured on the H200 (docs/benchmarks.md, issue 13);

@@ -13,7 +13,6 @@
 
 #include "core/cuda/device_buffer.h"
 #include "core/error.h"
-#include "media/relit_free_flight.h"
 #include "nerf/cuda/cuda_device.h"
 #include "render/gpu/device_scene.h"
 #include "render/gpu/image_resolve.h"
@@ -72,15 +71,10 @@ static bool use_grid_textures() {
 
 // Scenes with NeRF models are traced in the wavefront form (wavefront.h: the network evaluated in batches on
 // tensor cores) unless NERFPT_OPTIX_WAVEFRONT=0, a benchmark knob: every sample evaluated by its own thread.
-// Scenes with a relit NeRF (media/relit_free_flight.h) always take the per-thread program: it runs the CPU's
-// trace_path, free flight and event shading included, while the wavefront form's NeRF pass knows only the
-// emissive integral. The price is the wavefront's speed-up on such scenes (every NeRF sample, the emissive
-// models' included, evaluated by its own thread without tensor cores).
-static bool use_wavefront(Span<const media::VolumeView> volumes) {
-    if (media::any_relit(volumes)) {
-        spdlog::debug("OptiX: a relit NeRF in the scene: the per-thread program traces it");
-        return false;
-    }
+// Relit NeRFs (media/relit_free_flight.h) included: the NeRF pass samples their free flights and shadow rays'
+// transmittance, and the launches shade the events (relit_scatter); segments the pass cannot take (volumes
+// overlapping, a network the fp16 kernels do not support) are integrated inline, free flight included.
+static bool use_wavefront() {
     const char* v = std::getenv("NERFPT_OPTIX_WAVEFRONT");
     return !(v && std::string(v) == "0");
 }
@@ -96,7 +90,7 @@ struct OptixRenderer::State {
         : scene(scene), width(w), height(h), data(scene, w, h), dev(data.view(), use_grid_textures()),
           accel(ctx.get(), dev, stream.s),
           programs(ctx.get(), accel.input_meshes()) {
-        if (data.view().volumes.size > 0 && use_wavefront(data.view().volumes)) {
+        if (data.view().volumes.size > 0 && use_wavefront()) {
             const size_t pixels = size_t(w) * size_t(h);
             wavefront = std::make_unique<WavefrontLoop>(data.view().volumes, dev.view().volumes,
                                                         pixels * slots_for(pixels, k_max_slots), stream.s);

@@ -24,6 +24,7 @@ WavefrontLoop::WavefrontLoop(Span<const media::VolumeView> host, Span<const medi
     m_max_paths = uint32_t(max_paths);
     m_path_words.allocate(max_paths * k_path_words, "the path states", "--res or --spp");
     m_queries.allocate(2 * max_paths, "the path states", "--res or --spp");
+    m_events.allocate(max_paths, "the path states", "--res or --spp");
     m_queue.allocate(max_paths, "the path states", "--res or --spp");
     m_active[0].allocate(max_paths, "the path states", "--res or --spp");
     m_active[1].allocate(max_paths, "the path states", "--res or --spp");
@@ -36,7 +37,7 @@ void WavefrontLoop::run_wave(LaunchParams p, uint32_t slots, const OptixPrograms
     if (n > m_max_paths)
         throw Error("WavefrontLoop: a wave of " + std::to_string(n) + " paths, built for " +
                     std::to_string(m_max_paths));
-    const PathStore paths{m_path_words.data(), m_max_paths, m_queries.data()};
+    const PathStore paths{m_path_words.data(), m_max_paths, m_queries.data(), m_events.data()};
     p.wave.paths = paths;
     p.wave.queue = m_queue.data();
     p.wave.nerf_slot = m_pass.nerf_slots();

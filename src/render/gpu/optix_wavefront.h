@@ -33,6 +33,7 @@ class WavefrontLoop {
     NerfSegmentPass m_pass;
     DeviceBuffer<uint4> m_path_words;  // PathStore's planes
     DeviceBuffer<NerfQuery> m_queries;  // two per path
+    DeviceBuffer<FlightEvent> m_events;  // one per path
     uint32_t m_max_paths = 0;
     DeviceBuffer<uint32_t> m_active[2];
     DeviceBuffer<uint32_t> m_queue;  // per path: its queue_word (wavefront.h)

@@ -17,12 +17,14 @@ namespace npt::gpu {
 // A warp's loads and stores of its paths' states are then coalesced (as an array of 240-byte structs, each
 // 4-byte access of a warp touched 32 sectors, and the launches spent their time there), and the NeRF pass
 // writes a result as one word. Beside them each path's two queries ([2i] the volume ray's, [2i + 1] the
-// shadow ray's), read by the pass only for the segments queued.
+// shadow ray's), read by the pass only for the segments queued, and its relit free flight's event (read by the
+// next launch only where WavefrontPath::relit_flight says there was a flight).
 constexpr uint32_t k_path_words = uint32_t((sizeof(WavefrontPath) + 15) / 16);
 struct PathStore {
     uint4* words = nullptr;
     uint32_t stride = 0;  // the paths of the wave at most: each plane's length
     NerfQuery* queries = nullptr;
+    FlightEvent* events = nullptr;  // one per path
 };
 
 NPT_HD NPT_INLINE WavefrontPath load_path(const PathStore& s, uint32_t i) {

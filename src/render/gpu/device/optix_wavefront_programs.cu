@@ -10,20 +10,49 @@ using namespace npt;
 
 namespace {
 
-// Traces the path's ray and finds the volumes on [0, hit): inline, or queued for the NeRF pass.
-// A query left for the pass is stored at once (PathStore::queries); returns its slot, or k_no_query.
+// Traces the path's ray and finds the volumes on [0, hit): inline, or queued for the NeRF pass. trace_path's
+// random numbers in its order: the lattice offset, then, where any volume is relit, the free flight's target.
+// A query left for the pass is stored at once (PathStore::queries); returns its slot, or k_no_query. A relit
+// free flight (queued, or inline with an event) is marked in p.relit_flight; an inline event is stored at once
+// (PathStore::events), a queued flight's by the pass.
 __device__ uint32_t begin_segment(gpu::WavefrontPath& p, uint32_t id, SobolSampler& sampler,
                                   const OptixTracer& tracer) {
     p.found = tracer.intersect(p.ray, INFINITY, &p.hit);
     p.vol = media::VolumeResult{};
+    p.relit_flight = false;
     p.phase = gpu::PathPhase::Scatter;
-    if (params.scene.volumes.size == 0) return gpu::k_no_query;
+    const Span<const media::VolumeView> volumes = params.scene.volumes;
+    if (volumes.size == 0) return gpu::k_no_query;
+    const float xi = sampler.next_1d();
+    media::FreeFlight flight;
+    if (media::any_relit(volumes)) flight.target = media::free_flight_target(sampler.next_1d());
     gpu::NerfQuery q;
-    if (!gpu::volume_segment(params.scene.volumes, params.wave.nerf_slot, p.ray, 0.0f,
-                             p.found ? p.hit.t : INFINITY, sampler.next_1d(), false, &q, &p.vol))
+    const gpu::SegmentRoute route = gpu::volume_segment(volumes, params.wave.nerf_slot, p.ray, 0.0f,
+                                                        p.found ? p.hit.t : INFINITY, xi, false, &q, &p.vol,
+                                                        &flight);
+    if (route == gpu::SegmentRoute::Inline) {
+        if (flight.event) {
+            params.wave.paths.events[id] = gpu::FlightEvent{flight.p_model, flight.t, int32_t(flight.volume)};
+            p.relit_flight = true;
+        }
         return gpu::k_no_query;
+    }
     params.wave.paths.queries[2 * size_t(id)] = q;
+    p.relit_flight = route == gpu::SegmentRoute::Flight;
     return q.slot;
+}
+
+// The free flight of the path's last segment (begin_segment): its event, if it had one.
+__device__ media::FreeFlight flight_of(const gpu::WavefrontPath& p, uint32_t id) {
+    media::FreeFlight flight;
+    if (!p.relit_flight) return flight;
+    const gpu::FlightEvent e = params.wave.paths.events[id];
+    if (e.volume < 0) return flight;
+    flight.event = true;
+    flight.t = e.t;
+    flight.p_model = e.p_model;
+    flight.volume = e.volume;
+    return flight;
 }
 
 __device__ void write_path(gpu::WavefrontPath& p) {
@@ -76,8 +105,21 @@ extern "C" __global__ void __raygen__wavefront() {
         // The camera ray's vertex: its first hit goes straight to the film (no room in the path's state).
         const bool record_first = p.st.depth == 0 && film_records_first_hit();
         render::FirstHit first;
-        const bool more = render::path_scatter(params.scene, tracer, p.st, p.ray, p.found, p.hit, sampler,
-                                               params.path, &shadow, &next, record_first ? &first : nullptr);
+        const media::FreeFlight flight = flight_of(p, id);
+        bool more;
+        if (flight.event) {
+            // The path scatters in a relit NeRF at distance flight.t; at the camera vertex that is the film's
+            // first hit (albedo, the facing normal, the distance).
+            const media::RelitEvent ev = media::relit_event_at(params.scene.volumes, p.ray, flight);
+            if (record_first)
+                render::record_first_event(&first, render::camera_transmittance(p.st.throughput), ev.sample.albedo,
+                                           ev.frame.n, flight.t);
+            more = render::relit_scatter(params.scene, tracer, p.st, ev, -p.ray.d, sampler, params.path, &shadow,
+                                         &next);
+        } else {
+            more = render::path_scatter(params.scene, tracer, p.st, p.ray, p.found, p.hit, sampler, params.path,
+                                        &shadow, &next, record_first ? &first : nullptr);
+        }
         if (record_first) {
             render::FirstHitSums sums;
             render::add_first_hit(sums, first);
@@ -91,7 +133,7 @@ extern "C" __global__ void __raygen__wavefront() {
             if (params.scene.volumes.size == 0) {
                 p.st.radiance += shadow.contribution;
             } else if (gpu::volume_segment(params.scene.volumes, w.nerf_slot, shadow.ray, 0.0f, shadow.tmax,
-                                           shadow.xi, true, &q, &in_place)) {
+                                           shadow.xi, true, &q, &in_place) != gpu::SegmentRoute::Inline) {
                 p.shadow_pending = true;  // its transmittance comes from the NeRF pass
                 w.paths.queries[2 * size_t(id) + 1] = q;
                 queued[1] = q.slot;
