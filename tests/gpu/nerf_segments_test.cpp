@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "media/volume_integrator.h"
+#include "nerf_pass_run.h"
 #include "random_nerf_volume.h"
 #include "render/gpu/device_scene.h"
 #include "render/gpu/shared_math_check.h"
@@ -71,35 +72,12 @@ void expect_pass_matches_cpu(const gpu::NerfPassTuning& tuning, const char* what
     }
     EXPECT_GT(queued, n / 2);
 
-    std::vector<uint32_t> queue(paths.size());  // what a launch writes beside the paths
-    for (size_t i = 0; i < paths.size(); ++i)
-        queue[i] = gpu::queue_word(paths[i].phase != gpu::PathPhase::Done, queries[2 * i].slot,
-                                   queries[2 * i + 1].slot);
-    // The paths as the launches keep them: planes of words (PathStore), built here with the same functions.
-    const uint32_t stride = uint32_t(paths.size());
-    std::vector<uint4> words(size_t(gpu::k_path_words) * stride);
-    for (uint32_t i = 0; i < stride; ++i)
-        gpu::store_path({words.data(), stride, queries.data()}, i, paths[i]);
-    gpu::DeviceBuffer<uint4> dev_words;
-    dev_words.upload(words);
-    gpu::DeviceBuffer<gpu::NerfQuery> dev_queries;
-    dev_queries.upload(queries);
-    const gpu::PathStore dev_paths{dev_words.data(), stride, dev_queries.data()};
-    gpu::DeviceBuffer<uint32_t> dev_queue;
-    dev_queue.upload(queue);
-    gpu::DeviceBuffer<uint32_t> next;
-    next.allocate(paths.size());
-    const uint32_t going_on =
-        pass.run(dev_paths, dev_queue.data(), nullptr, uint32_t(paths.size()), next.data());
+    const test::NerfPassRun run = test::run_nerf_pass(pass, paths, queries,
+                                                      std::vector<gpu::FlightEvent>(paths.size()));
     // The first n paths are in phase Scatter and go on; the done ones do not.
-    ASSERT_EQ(going_on, uint32_t(n));
-    std::vector<uint32_t> listed = next.download();
-    listed.resize(size_t(n));
-    std::sort(listed.begin(), listed.end());
-    for (int i = 0; i < n; ++i) ASSERT_EQ(listed[size_t(i)], uint32_t(i));
-    words = dev_words.download();
-    std::vector<gpu::WavefrontPath> out(paths.size());
-    for (uint32_t i = 0; i < stride; ++i) out[i] = gpu::load_path({words.data(), stride, queries.data()}, i);
+    ASSERT_EQ(run.going_on, uint32_t(n));
+    for (int i = 0; i < n; ++i) ASSERT_EQ(run.listed[size_t(i)], uint32_t(i));
+    const std::vector<gpu::WavefrontPath>& out = run.paths;
     cudaStreamDestroy(stream);
 
     // The only difference is fp16 rounding in the MLPs (2^-11 relative per operand). This network's outputs

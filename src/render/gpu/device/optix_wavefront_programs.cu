@@ -42,6 +42,13 @@ __device__ uint32_t begin_segment(gpu::WavefrontPath& p, uint32_t id, SobolSampl
     return q.slot;
 }
 
+// The event a free flight found (the intrinsic fields queried here, by this thread). A call, not inlined: the
+// intrinsic network's evaluation then does not weigh on the registers of the launch's main body, which most
+// vertices (surfaces) take without it.
+__device__ __noinline__ media::RelitEvent relit_event(const Ray& ray, const media::FreeFlight& flight) {
+    return media::relit_event_at(params.scene.volumes, ray, flight);
+}
+
 // The free flight of the path's last segment (begin_segment): its event, if it had one.
 __device__ media::FreeFlight flight_of(const gpu::WavefrontPath& p, uint32_t id) {
     media::FreeFlight flight;
@@ -110,7 +117,7 @@ extern "C" __global__ void __raygen__wavefront() {
         if (flight.event) {
             // The path scatters in a relit NeRF at distance flight.t; at the camera vertex that is the film's
             // first hit (albedo, the facing normal, the distance).
-            const media::RelitEvent ev = media::relit_event_at(params.scene.volumes, p.ray, flight);
+            const media::RelitEvent ev = relit_event(p.ray, flight);
             if (record_first)
                 render::record_first_event(&first, render::camera_transmittance(p.st.throughput), ev.sample.albedo,
                                            ev.frame.n, flight.t);
