@@ -121,11 +121,17 @@ Rgb trace_relit(const render::SceneView& sv, const media::VolumeView& v, const F
 }
 
 // A small NeRF with random density features and a relight section with random intrinsic parameters: a
-// relightable model as the renderer sees one, before any relight training exists.
-inline nerf::NerfModel random_relightable_model(uint32_t seed, bool relightable = true) {
+// relightable model as the renderer sees one, before any relight training exists. `pass_network`: the NeRF's
+// hash grid of the default shape (16 levels x 2 features, 2^14 entries), the one the OptiX wavefront form's fp16
+// kernels take (nerf/cuda/fused_mlp.h mlp_shape_supported), instead of 4 levels (quicker on the CPU).
+inline nerf::NerfModel random_relightable_model(uint32_t seed, bool relightable = true, bool pass_network = false) {
     nerf::NerfConfig c;
-    c.encoding.grid.levels = 4;
-    c.encoding.grid.log2_table_size = 12;
+    if (pass_network) {
+        c.encoding.grid.log2_table_size = 14;
+    } else {
+        c.encoding.grid.levels = 4;
+        c.encoding.grid.log2_table_size = 12;
+    }
     c.encoding.finest_resolution = 64;
     c.occupancy.resolution = 16;
     c.march.max_steps = 256;  // steps of sqrt(3)/256: fewer samples, the tests stay quick
