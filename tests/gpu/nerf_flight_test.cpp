@@ -131,7 +131,8 @@ void expect_flights_match_cpu(const gpu::NerfPassTuning& tuning, const char* wha
     // wrong lattice offset, segment start or world-t map fails) where the CPU's optical depth crosses the target
     // within eps; no GPU event only where the CPU's whole segment stays below the target plus eps. Shadow
     // segments: T within 2e-4 (the emissive pass's bound). Up to 0.5% of the segments may miss (a cell decision
-    // flipped by rounding, as in nerf_segments_test), none by more than 0.05 in optical depth or 0.1 in T.
+    // flipped by rounding adds or drops a sample, as in nerf_segments_test), none by more than 0.05 in optical
+    // depth, 0.01 in t or 0.1 in T.
     int flights = 0, events = 0, same_sample = 0, outliers = 0, gross = 0, shadows = 0;
     for (int i = 0; i < n; ++i) {
         const size_t s = size_t(i);
@@ -156,7 +157,8 @@ void expect_flights_match_cpu(const gpu::NerfPassTuning& tuning, const char* wha
         const float tau_total = cs.empty() ? 0.0f : cs.back().tau_after;
         const float eps = 2e-4f + 5e-4f * q.target;
         bool ok = true;
-        float miss = 0.0f;  // by how much the target is missed in optical depth
+        float miss = 0.0f;     // by how much the target is missed in optical depth
+        float off = 0.0f;      // how far the GPU's event lies from the nearest CPU sample (world t)
         if (e.volume < 0) {
             ok = tau_total < q.target + eps;
             miss = tau_total - q.target;
@@ -167,18 +169,20 @@ void expect_flights_match_cpu(const gpu::NerfPassTuning& tuning, const char* wha
             size_t k = 0;
             for (size_t j = 1; j < cs.size(); ++j)
                 if (std::fabs(cs[j].t - e.t) < std::fabs(cs[k].t - e.t)) k = j;
-            const bool on_sample = std::fabs(cs[k].t - e.t) <= 1e-5f * std::max(1.0f, std::fabs(cs[k].t)) &&
-                                   length(cs[k].p - e.p_model) <= 1e-5f;
-            EXPECT_TRUE(on_sample) << i << ": GPU event at t " << e.t << ", nearest CPU sample at " << cs[k].t;
+            off = std::fabs(cs[k].t - e.t);
+            const bool on_sample =
+                off <= 1e-5f * std::max(1.0f, std::fabs(cs[k].t)) && length(cs[k].p - e.p_model) <= 1e-5f;
             ok = on_sample && cs[k].tau_before < q.target + eps && cs[k].tau_after >= q.target - eps;
             miss = std::max(cs[k].tau_before - q.target, q.target - cs[k].tau_after);
             const media::FreeFlight& f = cpu_flight[s];
             if (f.event && std::fabs(f.t - e.t) <= 1e-5f * std::max(1.0f, std::fabs(f.t))) ++same_sample;
         }
         if (!ok && ++outliers <= 5)
-            std::printf("flight %d: target %.5f, cpu depth %.5f, gpu event %d at t %.5f (miss %.2e)\n", i,
-                        q.target, tau_total, e.volume, e.t, miss);
-        if (!ok && miss > 0.05f) ++gross;
+            std::printf("flight %d: target %.5f, cpu depth %.5f, gpu event %d at t %.5f, %.2e from a cpu sample "
+                        "(miss %.2e)\n",
+                        i, q.target, tau_total, e.volume, e.t, off, miss);
+        // A sample is ~2e-3 in world t here: an event 5 samples from any of the CPU's is no rounding.
+        if (!ok && (miss > 0.05f || off > 0.01f)) ++gross;
     }
     std::printf("%s: %d flights (%d with a GPU event, %d on the CPU integrator's own event sample), %d shadow "
                 "segments, %d outside the bounds (%s)\n",
