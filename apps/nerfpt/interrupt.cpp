@@ -35,7 +35,7 @@ void InterruptGuard::watch(std::stop_token stop) {
             [[maybe_unused]] auto n = write(STDERR_FILENO, msg, std::strlen(msg));
             continue;
         }
-        std::lock_guard lock(m_mutex);  // let a file being written finish first
+        std::unique_lock lock(m_mutex);  // let every file being written finish first
         // Only async-signal-safe calls from here on: other threads may be anywhere, so no exit handlers run.
         const char* msg = sig == SIGINT ? "\nnerfpt: interrupted\n" : "\nnerfpt: terminated\n";
         [[maybe_unused]] auto n = write(STDERR_FILENO, msg, std::strlen(msg));

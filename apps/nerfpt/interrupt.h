@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <mutex>
+#include <shared_mutex>
 #include <thread>
 
 namespace npt::cli {
@@ -21,7 +22,8 @@ class InterruptGuard {
     InterruptGuard& operator=(const InterruptGuard&) = delete;
 
     // While the returned lock lives, an interrupt is held back (it takes effect when the lock is released).
-    std::unique_lock<std::mutex> hold() { return std::unique_lock(m_mutex); }
+    // Shared: several threads may each be writing a file (a shot's frame writers), and all of them finish.
+    std::shared_lock<std::shared_mutex> hold() { return std::shared_lock(m_mutex); }
 
     // Work that can stop cleanly (training: save a checkpoint, then exit) turns this on: the first interrupt
     // then only sets stop_requested(); a second one exits at once as usual.
@@ -37,7 +39,7 @@ class InterruptGuard {
     std::atomic<int> m_stop_signal{0};
     sigset_t m_signals{};
     sigset_t m_old_mask{};
-    std::mutex m_mutex;
+    std::shared_mutex m_mutex;
     std::jthread m_watcher;
 };
 

@@ -12,6 +12,7 @@
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "dist/frames.h"
+#include "frame_writer.h"
 #include "interrupt.h"
 #include "render/backend/render_backend.h"
 #include "render/scene_data.h"
@@ -121,6 +122,22 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
     };
     double pose_s = 0.0, render_s = 0.0;  // the shot's time in posing + updating, and in rendering
     size_t done = 0;
+    // Frames are written by their own threads while the next ones render; each reports here, in order.
+    FrameWriter writer(FrameWriter::default_in_flight(), [&](int f, double write_s) {
+        ++done;
+        const fs::path exr = dist::frame_path(pattern, f);
+        const double shot_s = since(t_shot);
+        const double left_s = shot_s / double(done) * double(todo.size() - done);
+        if (sharing.share)  // this rank's frames
+            fmt::print("wrote {} (frame {}, {:.3f} s), its files in {}; {}{}{} of {} frames, {} left\n", exr.string(),
+                       f, scene::frame_time(f, fps), format_seconds(write_s), task_text, sharing.rank_text, done,
+                       todo.size(), format_seconds(left_s));
+        else
+            fmt::print("wrote {} (frame {}, {:.3f} s), its files in {}; {}{} of {} frames, {} left\n", exr.string(), f,
+                       scene::frame_time(f, fps), format_seconds(write_s), task_text, done + already, frames.size(),
+                       format_seconds(left_s));
+        std::fflush(stdout);
+    });
     for (int f : todo) {
         const double time = scene::frame_time(f, fps);
         const auto t_pose = std::chrono::steady_clock::now();
@@ -128,44 +145,36 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
         pose_s += since(t_pose);
         render::RenderOptions frame_options = resolved;
         frame_options.seed = dist::frame_seed(seed, f);
-        const fs::path exr = dist::frame_path(pattern, f);
-        fs::path png = exr;
-        png.replace_extension(".png");
         Progress progress(ps, std::cerr);
         const auto t0 = std::chrono::steady_clock::now();
-        render::AovImages aovs;
-        const Image image = renderer->render(
-            frame_options, [&progress](uint64_t d, uint64_t total) { progress.update(d, total); }, nullptr, &aovs);
+        auto aovs = std::make_shared<render::AovImages>();
+        auto image = std::make_shared<const Image>(renderer->render(
+            frame_options, [&progress](uint64_t d, uint64_t total) { progress.update(d, total); }, nullptr,
+            aovs.get()));
         progress.finish();
         render_s += since(t0);
         const ExrMetadata meta =
             frame_metadata(render::make_camera_view(scene, resolved.width, resolved.height), f, time, fps, frame_options.seed);
-        {
+        const fs::path exr = dist::frame_path(pattern, f);
+        writer.submit(f, [&interrupts, &args, aov_mask, exr, image, aovs, meta] {
+            fs::path png = exr;
+            png.replace_extension(".png");
             auto no_interrupt = interrupts.hold();  // whole files only: an interrupt waits for this frame's writes
-            write_render_png(png, image, args.exposure);
+            write_render_png(png, *image, args.exposure);
             if (args.aov_files)
-                for (const AovFile& a : aov_file_paths(exr, aov_mask)) write_aov_file(a, aovs);
-            write_exr_layers(exr, image, aov_layers(aovs, aov_mask), &meta);  // last: it marks the frame done
-        }
-        ++done;
-        const double frame_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        const double shot_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_shot).count();
-        const double left_s = shot_s / double(done) * double(todo.size() - done);
-        if (sharing.share)  // this rank's frames
-            fmt::print("wrote {} (frame {}, {:.3f} s) in {}; {}{}{} of {} frames, {} left\n", exr.string(), f, time,
-                       format_seconds(frame_s), task_text, sharing.rank_text, done, todo.size(), format_seconds(left_s));
-        else
-            fmt::print("wrote {} (frame {}, {:.3f} s) in {}; {}{} of {} frames, {} left\n", exr.string(), f, time,
-                       format_seconds(frame_s), task_text, done + already, frames.size(), format_seconds(left_s));
-        std::fflush(stdout);
+                for (const AovFile& a : aov_file_paths(exr, aov_mask)) write_aov_file(a, *aovs);
+            write_exr_layers(exr, *image, aov_layers(*aovs, aov_mask), &meta);  // last: it marks the frame done
+        });
     }
+    writer.finish_all();
     const double shot_s = since(t_shot);
     fmt::print("{}rendered {} frames in {}\n", sharing.rank_text, done, format_seconds(shot_s));
-    // Where a frame's time goes (the shot benchmark, docs/benchmarks.md): rendering against posing the scene and
-    // writing the files.
-    spdlog::info("{}per frame: {:.2f} ms rendering, {:.2f} ms posing and updating, {:.2f} ms writing and the rest",
+    // Where a frame's time goes (the shot benchmark, docs/benchmarks.md): rendering, posing the scene, and what
+    // the render loop waited for its {} writer threads (writing beyond what overlapped the rendering).
+    spdlog::info("{}per frame: {:.2f} ms rendering, {:.2f} ms posing and updating, {:.2f} ms waiting for the "
+                 "files ({} writer threads), {:.2f} ms in all",
                  sharing.rank_text, 1e3 * render_s / double(done), 1e3 * pose_s / double(done),
-                 1e3 * (shot_s - render_s - pose_s) / double(done));
+                 1e3 * writer.waited_seconds() / double(done), writer.max_in_flight(), 1e3 * shot_s / double(done));
     return 0;
 }
 

@@ -1,0 +1,42 @@
+#include "frame_writer.h"
+
+#include <algorithm>
+#include <thread>
+
+namespace npt::cli {
+
+FrameWriter::FrameWriter(int max_in_flight, WrittenFn written)
+    : m_max(std::max(1, max_in_flight)), m_written(std::move(written)) {}
+
+FrameWriter::~FrameWriter() {
+    for (Pending& p : m_pending)
+        if (p.done.valid()) p.done.wait();
+}
+
+int FrameWriter::default_in_flight() {
+    return std::clamp(int(std::thread::hardware_concurrency()) / 2, 1, 8);
+}
+
+void FrameWriter::submit(int frame, std::function<void()> write) {
+    while (int(m_pending.size()) >= m_max) finish_oldest();
+    m_pending.push_back({frame, std::async(std::launch::async, [w = std::move(write)] {
+                             const auto t0 = std::chrono::steady_clock::now();
+                             w();
+                             return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                         })});
+}
+
+void FrameWriter::finish_all() {
+    while (!m_pending.empty()) finish_oldest();
+}
+
+void FrameWriter::finish_oldest() {
+    const auto t0 = std::chrono::steady_clock::now();
+    Pending p = std::move(m_pending.front());
+    m_pending.pop_front();
+    const double write_s = p.done.get();  // rethrows the write's error
+    m_waited += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (m_written) m_written(p.frame, write_s);
+}
+
+}  // namespace npt::cli
