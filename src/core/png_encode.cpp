@@ -53,7 +53,7 @@ void encode_png(const std::filesystem::path& path, int width, int height, int ch
     }
     uLongf packed_size = compressBound(uLong(filtered.size()));
     std::vector<uint8_t> packed(packed_size);
-    if (compress2(packed.data(), &packed_size, filtered.data(), uLong(filtered.size()), 3) != Z_OK)
+    if (compress2(packed.data(), &packed_size, filtered.data(), uLong(filtered.size()), 1) != Z_OK)
         throw Error(path.string() + ": cannot compress the PNG's pixels");
 
     std::vector<uint8_t> file = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};

@@ -1,5 +1,5 @@
-// An 8-bit PNG encoder on zlib: the Paeth filter on every row and deflate level 3. stb_image_write's encoder
-// (which nerfpt used) takes ~0.35 s for a 1080p RGB frame whatever its level; this one a fraction of that, which
+// An 8-bit PNG encoder on zlib: the Paeth filter on every row and deflate level 1. stb_image_write's encoder
+// (which nerfpt used) took 0.24 s for a 1080p RGB frame (any level), this one 0.08 s for a file 5% larger, which
 // matters for shots (a PNG preview beside every frame's EXR).
 #pragma once
 
