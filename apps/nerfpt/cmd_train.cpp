@@ -99,6 +99,11 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                                 "0 turns it off)",
                                 args.relight.normal_smoothing))
         ->check(CLI::Range(0.0f, 0.5f));
+    cmd->add_option("--relight-table", args.relight.table_log2,
+                    fmt::format("log2 of the hash entries per level of the albedo/roughness/normal grid: more "
+                                "resolves finer texture, at 12 x 2 x 4 bytes x 2^N of model size (default: {})",
+                                args.relight.table_log2))
+        ->check(CLI::Range(12, 24));
     cmd->add_flag("--resume", args.resume, "Continue training the model in --output where it stopped");
     cmd->add_flag("--force", args.force, "Overwrite --output if it exists (without --resume)")
         ->excludes(cmd->get_option("--resume"));

@@ -28,6 +28,7 @@ struct RelightStageOptions {
     int event_draws = nerf::RelightSampleSettings{}.event_draws;
     nerf::NormalEstimator normals = nerf::RelightSampleSettings{}.normals;
     float normal_smoothing = nerf::RelightSampleSettings{}.normal_smoothing;
+    int table_log2 = nerf::IntrinsicConfig{}.grid.log2_table_size;  // hash entries per level of the intrinsic grid
     bool quiet = false;
     nerf::Backend backend = nerf::Backend::cpu;  // where the NeRF is evaluated while gathering surface points
 };
