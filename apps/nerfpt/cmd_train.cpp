@@ -104,6 +104,11 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                                 "resolves finer texture, at 12 x 2 x 4 bytes x 2^N of model size (default: {})",
                                 args.relight.table_log2))
         ->check(CLI::Range(12, 24));
+    cmd->add_option("--relight-resolution", args.relight.finest_resolution,
+                    fmt::format("Finest resolution of that grid across the model's box (times aabb_scale): the "
+                                "smallest texture detail the albedo can hold (default: {})",
+                                args.relight.finest_resolution))
+        ->check(CLI::Range(32.0f, 8192.0f));
     cmd->add_flag("--resume", args.resume, "Continue training the model in --output where it stopped");
     cmd->add_flag("--force", args.force, "Overwrite --output if it exists (without --resume)")
         ->excludes(cmd->get_option("--resume"));

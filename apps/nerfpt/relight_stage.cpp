@@ -43,6 +43,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     nerf::RelightTrainSettings ts;
     ts.seed = model.config.training.seed;
     ts.intrinsic.grid.log2_table_size = options.table_log2;
+    ts.intrinsic.finest_resolution = options.finest_resolution;
     ts.batch = options.batch ? options.batch : (gpu ? k_relight_batch_gpu : k_relight_batch_cpu);
     nerf::RelightTrainer trainer(model, data.cameras.size(), samples, ts);
     nerf::RelightStepStats st;

@@ -29,6 +29,7 @@ struct RelightStageOptions {
     nerf::NormalEstimator normals = nerf::RelightSampleSettings{}.normals;
     float normal_smoothing = nerf::RelightSampleSettings{}.normal_smoothing;
     int table_log2 = nerf::IntrinsicConfig{}.grid.log2_table_size;  // hash entries per level of the intrinsic grid
+    float finest_resolution = nerf::IntrinsicConfig{}.finest_resolution;  // of the intrinsic grid, x aabb_scale
     bool quiet = false;
     nerf::Backend backend = nerf::Backend::cpu;  // where the NeRF is evaluated while gathering surface points
 };
