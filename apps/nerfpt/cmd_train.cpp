@@ -76,8 +76,8 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
         ->check(CLI::Range(64, 1 << 22));
     cmd->add_option("--relight-directions", args.relight.directions,
                     fmt::format("Light directions per surface point (visibility and indirect light toward each; "
-                                "default: {})",
-                                args.relight.directions))
+                                "default: {} on a GPU, {} on the CPU)",
+                                k_relight_directions_gpu, k_relight_directions_cpu))
         ->check(CLI::Range(4, 1024));
     cmd->add_option("--relight-event-draws", args.relight.event_draws,
                     fmt::format("Events drawn per surface point along its camera ray, as the renderer draws them; "

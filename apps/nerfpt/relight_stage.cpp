@@ -22,7 +22,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     const bool gpu = options.backend != nerf::Backend::cpu;
     nerf::RelightSampleSettings ss;
     ss.points = options.points ? options.points : (gpu ? k_relight_points_gpu : k_relight_points_cpu);
-    ss.directions = options.directions;
+    ss.directions = options.directions ? options.directions : (gpu ? k_relight_directions_gpu : k_relight_directions_cpu);
     ss.event_draws = options.event_draws;
     ss.normals = options.normals;
     ss.normal_smoothing = options.normal_smoothing;

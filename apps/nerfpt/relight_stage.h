@@ -14,17 +14,19 @@ namespace npt::cli {
 
 class InterruptGuard;
 
-// The defaults of points and batch per backend. Measured on dev (docs/benchmarks.md, issue 24): 16x more points
-// at a quarter of the directions buys 2 dB of albedo on the GPU for 6 s more; the CPU's keep the gather to
-// minutes on 2 cores.
-constexpr int k_relight_points_gpu = 262144, k_relight_points_cpu = 32768;
+// The defaults of points, directions and batch per backend. Measured on dev (docs/benchmarks.md, issue 24): on the
+// GPU, 16x more points at a quarter of the directions bought 2 dB of albedo, and 4x more again at half the
+// directions (1 M x 8) another 0.9 dB and 1 degree of normals for 11 s more; the CPU's keep the gather to minutes
+// on 2 cores.
+constexpr int k_relight_points_gpu = 1048576, k_relight_points_cpu = 32768;
+constexpr int k_relight_directions_gpu = 8, k_relight_directions_cpu = 16;
 constexpr int k_relight_batch_gpu = 4096, k_relight_batch_cpu = 1024;
 
 struct RelightStageOptions {
     uint64_t steps = 1500;  // optimiser steps of the stage
     int points = 0;         // surface points; 0: k_relight_points_* of the backend
     int batch = 0;          // points per optimiser step; 0: k_relight_batch_* of the backend
-    int directions = nerf::RelightSampleSettings{}.directions;
+    int directions = 0;     // light directions per point; 0: k_relight_directions_* of the backend
     int event_draws = nerf::RelightSampleSettings{}.event_draws;
     nerf::NormalEstimator normals = nerf::RelightSampleSettings{}.normals;
     float normal_smoothing = nerf::RelightSampleSettings{}.normal_smoothing;
