@@ -240,9 +240,29 @@ def _volume_extras(obj, world, gltf_dir, absolute_paths, notes):
         # Said even where it is nerfpt's default (relit for a relightable model): the export means what the
         # Blender object shows, whatever the default becomes.
         volume["shading"] = "relit" if relit else "emissive"
-    if use_model and s.use_crop:
+    if use_model and s.object_placement:
+        volume["placement"] = "object"  # the object frame: the node places the object (see _cube_of)
+    elif use_model and s.use_crop:
         volume["crop"] = {"min": list(s.crop_min), "max": list(s.crop_max)}
     return {"volume": volume}
+
+
+# nerfpt's object placement: the cube's local space is the object frame turned Y up, local (x, y, z) = object
+# (x, z, -y) (docs/formats.md); this maps local back to the object frame.
+_OBJECT_FROM_LOCAL = Matrix(((1, 0, 0, 0), (0, 0, -1, 0), (0, 1, 0, 0), (0, 0, 0, 1)))
+
+
+def _cube_of(obj, world, extras):
+    """The volume cube's glTF matrix, min and max. Object placement: the node maps the object frame (Y up) to the
+    world, and the box is the object's; else the cube is the baked grid's."""
+    s = obj.nerfpt_volume
+    cube = world @ Matrix.Translation(s.voxel_shift)  # volume_material, "Voxel centres"
+    if extras["volume"].get("placement") != "object":
+        return gltf_post.gltf_node_matrix(cube), list(s.cube_min), list(s.cube_max)
+    object_from_cube = Matrix([s.object_from_cube[4 * r : 4 * r + 4] for r in range(4)])
+    node = cube @ object_from_cube.inverted() @ _OBJECT_FROM_LOCAL
+    lo, hi = s.object_box_min, s.object_box_max
+    return gltf_post.gltf_node_matrix(node), [lo[0], lo[2], -hi[1]], [hi[0], hi[2], -lo[1]]
 
 
 def _exported_area_light(obj):
@@ -414,18 +434,10 @@ def export(scene, view_layer, filepath, resolution=None, absolute_paths=False, a
     for obj in scene.objects:
         if obj.type != "VOLUME" or not obj.nerfpt_volume.is_capture or not renders(obj, view_layer):
             continue
-        s = obj.nerfpt_volume
         world = obj.evaluated_get(depsgraph).matrix_world
-        cube = world @ Matrix.Translation(s.voxel_shift)  # volume_material, "Voxel centres"
-        cubes.append(
-            {
-                "name": obj.name,
-                "matrix": gltf_post.gltf_node_matrix(cube),
-                "min": list(s.cube_min),
-                "max": list(s.cube_max),
-                "extras": _volume_extras(obj, world, gltf_dir, absolute_paths, notes),
-            }
-        )
+        extras = _volume_extras(obj, world, gltf_dir, absolute_paths, notes)
+        matrix, lo, hi = _cube_of(obj, world, extras)
+        cubes.append({"name": obj.name, "matrix": matrix, "min": lo, "max": hi, "extras": extras})
     if animation:
         # The add-on's own nodes are placed where the objects are now; they do not follow the animation.
         for obj in scene.objects:

@@ -2,7 +2,9 @@
 object that Cycles and EEVEE render with nerfpt's semantics, marked so that an export writes the `volume` cube
 nerfpt reads (docs/formats.md, "Volumes").
 
-A .npt is placed where its training cameras saw it (model_file.placement); a .vdb keeps its own coordinates
+A .npt is placed where its training cameras saw it (model_file.placement), or, when it carries an object frame
+(`nerfpt capture`), standing upright on the 3D cursor at its real size, cut to the object's box (the frame's
+crop baked, the export's placement 'object'); a .vdb keeps its own coordinates
 (the grid's space is the object's local space). The bake runs as a child process: in the UI a modal operator
 shows its progress in the status bar (Esc cancels); in background mode it blocks and prints progress lines.
 """
@@ -12,6 +14,7 @@ import secrets
 import time
 
 import bpy
+from mathutils import Matrix
 from bpy.props import (
     BoolProperty,
     EnumProperty,
@@ -43,10 +46,11 @@ def bake_path(model_path, resolution, crop, albedo=False):
 
 
 def create_capture(
-    context, name, grid_path, model_path="", location=(0, 0, 0), scale=(1, 1, 1), settings=None
+    context, name, grid_path, model_path="", location=(0, 0, 0), scale=(1, 1, 1), settings=None, matrix=None
 ):
-    """A Volume object for grid_path with the nerfpt material and settings; selected and active. settings
-    'shading' RELIT: the grid holds a relightable model's albedo, shaded as a scattering volume."""
+    """A Volume object for grid_path with the nerfpt material and settings; selected and active. The cube is at
+    `location` with `scale`, or `matrix` (cube local -> world) when given. settings 'shading' RELIT: the grid
+    holds a relightable model's albedo, shaded as a scattering volume."""
     volume = bpy.data.volumes.new(name)
     volume.filepath = grid_path
     if not volume.grids.load():
@@ -70,8 +74,11 @@ def create_capture(
     context.collection.objects.link(obj)
     # The cube at `location` with `scale`; the object half a voxel off it (volume_material, "Voxel centres").
     h = volume_material.half_voxel(density)
-    obj.location = [location[a] - scale[a] * h[a] for a in range(3)]
-    obj.scale = scale
+    if matrix is not None:
+        obj.matrix_world = matrix @ Matrix.Translation([-v for v in h])
+    else:
+        obj.location = [location[a] - scale[a] * h[a] for a in range(3)]
+        obj.scale = scale
     s = obj.nerfpt_volume
     s.voxel_shift = h
     s.is_capture = True
@@ -119,12 +126,18 @@ class ImportJob:
         if ext != ".npt":
             raise NerfptError(f"'{self.filepath}': expected a nerfpt model (.npt) or a baked grid (.vdb)")
         crop = (tuple(op.crop_min), tuple(op.crop_max)) if op.use_crop else None
+        self.matrix = None
         try:
+            frame = model_file.object_frame(self.filepath) if op.stand_at_cursor and not crop else None
+            if frame:
+                crop = model_file.object_crop(self.filepath, frame)
             place = model_file.placement(self.filepath, crop)
         except model_file.ModelFileError as e:
             raise NerfptError(str(e)) from None
         self.model_path = self.filepath
         self.location, self.scale = place["centre"], place["half_size"]
+        if frame:
+            self._stand_on_cursor(context, frame, place)
         try:
             relit = op.shading == "RELIT" and model_file.is_relightable(self.filepath)
         except model_file.ModelFileError as e:
@@ -133,7 +146,8 @@ class ImportJob:
         self.settings["shading"] = "RELIT" if relit else "EMISSIVE"
         self.settings["source"] = "MODEL" if relit else op.source
         if crop:
-            self.settings.update(use_crop=True, crop_min=crop[0], crop_max=crop[1])
+            # With an object frame the crop is only the bake's: the export cuts the model to the object's box.
+            self.settings.update(use_crop=not frame, crop_min=crop[0], crop_max=crop[1])
         self.grid_path = bake_path(self.filepath, op.resolution, crop, albedo=relit)
         # The bake goes to a temporary name, renamed at the end: a cancelled or failed bake never replaces
         # (or deletes) a grid that another object uses.
@@ -146,6 +160,24 @@ class ImportJob:
             self.command += ["--crop", ",".join(f"{v:.9g}" for v in (*crop[0], *crop[1]))]
         if relit:
             self.command += ["--colour", "albedo"]
+
+    def _stand_on_cursor(self, context, frame, place):
+        """The cube placed so that the object frame's origin (the base centre on its supporting plane) is on the
+        3D cursor, its up along +Z, one object unit a metre."""
+        cube_to_world = Matrix.Translation(place["centre"]) @ Matrix.Diagonal((*place["half_size"], 1.0))
+        object_from_cube = Matrix(frame["object_to_world"]).inverted() @ cube_to_world
+        self.matrix = Matrix.Translation(context.scene.cursor.location) @ object_from_cube
+        self.settings.update(
+            object_placement=True,
+            object_from_cube=[v for row in object_from_cube for v in row],
+            object_box_min=frame["box"][0],
+            object_box_max=frame["box"][1],
+        )
+        if not frame["metric"]:
+            self.warnings.append(
+                f"{os.path.basename(self.filepath)}: the capture was not given the object's height "
+                "(nerfpt capture --height): one unit of the capture is one metre here"
+            )
 
     def bake_done(self, child):
         """After the child ended: raises NerfptError on failure, removes what a cancel left."""
@@ -175,7 +207,8 @@ class ImportJob:
 
     def finish(self, context):
         obj, has_color = create_capture(
-            context, self.name, self.grid_path, self.model_path, self.location, self.scale, self.settings
+            context, self.name, self.grid_path, self.model_path, self.location, self.scale, self.settings,
+            getattr(self, "matrix", None),
         )
         if not has_color:
             self.warnings.append(
@@ -226,6 +259,12 @@ class NERFPT_OT_import_model(bpy.types.Operator, ImportHelper):
     )
     density_scale: FloatProperty(name="Density scale", default=1.0, min=0.0, soft_max=10.0)
     emission_scale: FloatProperty(name="Emission scale", default=1.0, min=0.0, soft_max=10.0)
+    stand_at_cursor: BoolProperty(
+        name="Stand at the 3D cursor",
+        description="A capture that knows its object (nerfpt capture: supporting plane, up, box) stands upright "
+        "on the 3D cursor at its real size, cut to the object's box; off: placed where its cameras saw it",
+        default=True,
+    )
     use_crop: BoolProperty(
         name="Crop",
         description="Import only a box of the model (model space, e.g. the object without its room; "
@@ -245,6 +284,7 @@ class NERFPT_OT_import_model(bpy.types.Operator, ImportHelper):
         row.prop(self, "source")
         layout.prop(self, "density_scale")
         layout.prop(self, "emission_scale")
+        layout.prop(self, "stand_at_cursor")
         layout.prop(self, "use_crop")
         col = layout.column()
         col.enabled = self.use_crop

@@ -1,8 +1,9 @@
 """Where a nerfpt model (.npt) sits in its training world, read from the model file's header.
 
 Pure Python (no bpy). The file layout is docs/formats.md, "Model file": magic 'NPTNERF1', u32 version, then
-sections (4-byte tag, u64 length, payload). Only 'SCEN' is read here (f32 aabb_scale, 16 f64 world_to_model, row
-major); the parameter arrays are skipped, so reading a large model takes no time. A model with an 'RLIT' section
+sections (4-byte tag, u64 length, payload). Only 'SCEN' (f32 aabb_scale, 16 f64 world_to_model, row major) and
+'OBJF' (the object frame's JSON) are read here; the parameter arrays are skipped, so reading a large model takes
+no time. A model with an 'RLIT' section
 (`nerfpt train --relightable`) is relightable.
 
 Placement (docs/formats.md, "NeRF models queried directly"): the crop box (model space; default the model's box
@@ -13,6 +14,8 @@ the crop box in the training world and its scale half the box's size there, show
 saw it.
 """
 
+import json
+import math
 import struct
 
 MAGIC = b"NPTNERF1"
@@ -60,6 +63,69 @@ def section_tags(path):
 def is_relightable(path):
     """Whether the model carries the intrinsic fields (section 'RLIT', docs/formats.md "Model file")."""
     return "RLIT" in section_tags(path)
+
+
+def _section(path, tag):
+    """The payload of the first section `tag` (bytes), or None."""
+    with _open_model(path) as f:
+        while True:
+            sec = f.read(12)
+            if len(sec) == 0:
+                return None
+            if len(sec) < 12:
+                raise ModelFileError(f"{path}: truncated (section header)")
+            length = struct.unpack("<Q", sec[4:])[0]
+            if sec[:4] == tag:
+                data = f.read(length)
+                if len(data) < length:
+                    raise ModelFileError(f"{path}: truncated (section '{tag.decode('latin-1')}')")
+                return data
+            f.seek(length, 1)
+
+
+def object_frame(path):
+    """The object frame `nerfpt capture` stores (section 'OBJF', docs/formats.md), or None when the model has
+    none: {'object_to_world': 4 rows (object space, Z up -> the training world, a similarity), 'box': (min, max)
+    in object space, 'metric': whether object units are metres}."""
+    data = _section(path, b"OBJF")
+    if data is None:
+        return None
+    where = f"{path}: section 'OBJF'"
+    try:
+        j = json.loads(data.decode("utf-8"))
+        m = [float(v) for v in j["object_to_world"]]
+        lo = [float(v) for v in j["box"]["min"]]
+        hi = [float(v) for v in j["box"]["max"]]
+        metric = bool(j.get("metric", False))
+    except (ValueError, KeyError, TypeError, UnicodeDecodeError) as e:
+        raise ModelFileError(f"{where}: not an object frame ({e})") from None
+    if len(m) != 16 or len(lo) != 3 or len(hi) != 3 or not all(map(math.isfinite, m + lo + hi)):
+        raise ModelFileError(f"{where}: object_to_world needs 16 numbers and the box 3 + 3, all finite")
+    if not all(lo[a] < hi[a] for a in range(3)):
+        raise ModelFileError(f"{where}: box: the minimum must be below the maximum on every axis")
+    return {"object_to_world": [m[4 * r : 4 * r + 4] for r in range(4)], "box": (lo, hi), "metric": metric}
+
+
+def _apply(rows, p):
+    return [sum(rows[r][c] * p[c] for c in range(3)) + rows[r][3] for r in range(3)]
+
+
+def object_crop(path, frame):
+    """The crop (model space, ((x0, y0, z0), (x1, y1, z1))) that holds the object's box: the bounding box of its
+    corners in model space, within the model's box."""
+    aabb_scale, w2m = read_scene_section(path)
+    lo, hi = frame["box"]
+    corners = [
+        _apply(w2m, _apply(frame["object_to_world"], (hi[0] if i & 1 else lo[0], hi[1] if i & 2 else lo[1],
+                                                      hi[2] if i & 4 else lo[2])))
+        for i in range(8)
+    ]
+    bmin, bmax = model_box(aabb_scale)
+    cmin = tuple(max(bmin[a], min(c[a] for c in corners)) for a in range(3))
+    cmax = tuple(min(bmax[a], max(c[a] for c in corners)) for a in range(3))
+    if not all(cmin[a] < cmax[a] for a in range(3)):
+        raise ModelFileError(f"{path}: the object's box lies outside the model's box")
+    return cmin, cmax
 
 
 def read_scene_section(path):

@@ -117,6 +117,20 @@ class NerfptVolumeSettings(bpy.types.PropertyGroup):
         description="Half a voxel (local space): the nerfpt cube is the object's transform moved by this "
         "(Cycles centres voxels half a voxel off OpenVDB's convention)",
     )
+    object_placement: BoolProperty(
+        name="Object placement",
+        description="The model's object frame (nerfpt capture) is placed: the object stands where this object "
+        "puts it, nerfpt cuts it to the object's box (extras.volume.placement 'object')",
+        default=False,
+    )
+    object_from_cube: FloatVectorProperty(
+        name="Object from cube",
+        size=16,
+        default=(1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1),
+        description="Row-major: the cube's local space (the baked crop) -> the object frame (Z up)",
+    )
+    object_box_min: FloatVectorProperty(name="Object box min", size=3, description="Object frame, Z up")
+    object_box_max: FloatVectorProperty(name="Object box max", size=3, description="Object frame, Z up")
     cube_min: FloatVectorProperty(
         name="Cube min", size=3, default=(-1.0, -1.0, -1.0), description="The nerfpt volume cube, local space"
     )

@@ -59,6 +59,8 @@ class DATA_PT_nerfpt_capture(bpy.types.Panel):
         row.prop(s, "local_density")
         layout.prop(s, "casts_shadows")
         layout.prop(s, "step_voxels")
+        if s.object_placement:
+            layout.label(text="Object frame: stands where this object is, cut to its box")
         if s.use_crop:
             col = layout.column()
             col.enabled = False

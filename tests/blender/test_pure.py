@@ -204,6 +204,40 @@ class ModelFile(unittest.TestCase):
             with self.assertRaisesRegex(model_file.ModelFileError, "not a nerfpt model"):
                 model_file.is_relightable(p)
 
+    def test_object_frame(self):
+        frame = {
+            "version": 1,
+            "metric": True,
+            "object_to_world": [2, 0, 0, 0.1, 0, 2, 0, 0, 0, 0, 2, -0.5, 0, 0, 0, 1],
+            "box": {"min": [-0.2, -0.1, 0], "max": [0.2, 0.1, 0.4]},
+        }
+        with tempfile.TemporaryDirectory() as d:
+            p = os.path.join(d, "m.npt")
+            write_model(p, 1.0, 0.33, (0.5, 0.5, 0.5))
+            self.assertIsNone(model_file.object_frame(p))
+            write_model(p, 1.0, 0.33, (0.5, 0.5, 0.5), [(b"OBJF", json.dumps(frame).encode())])
+            f = model_file.object_frame(p)
+            self.assertTrue(f["metric"])
+            self.assertEqual(f["object_to_world"][2], [0, 0, 2, -0.5])
+            # World x in [-0.3, 0.5], y in [-0.2, 0.2], z in [-0.5, 0.3]; model = world (y, z, x) * 0.33 + 0.5.
+            lo, hi = model_file.object_crop(p, f)
+            for a, (want_lo, want_hi) in enumerate(((-0.2, 0.2), (-0.5, 0.3), (-0.3, 0.5))):
+                self.assertAlmostEqual(lo[a], want_lo * 0.33 + 0.5, places=6)
+                self.assertAlmostEqual(hi[a], want_hi * 0.33 + 0.5, places=6)
+            for bad, msg in (
+                (b"{", "not an object frame"),
+                (json.dumps({**frame, "box": {"min": [0, 0, 0]}}).encode(), "not an object frame"),
+                (json.dumps({**frame, "object_to_world": [1] * 15}).encode(), "16 numbers"),
+                (json.dumps({**frame, "box": {"min": [0, 0, 1], "max": [1, 1, 1]}}).encode(), "below the maximum"),
+            ):
+                write_model(p, 1.0, 0.33, (0.5, 0.5, 0.5), [(b"OBJF", bad)])
+                with self.assertRaisesRegex(model_file.ModelFileError, "section 'OBJF': .*" + msg):
+                    model_file.object_frame(p)
+            far = {**frame, "object_to_world": [2, 0, 0, 50, 0, 2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1]}
+            write_model(p, 1.0, 0.33, (0.5, 0.5, 0.5), [(b"OBJF", json.dumps(far).encode())])
+            with self.assertRaisesRegex(model_file.ModelFileError, "outside the model's box"):
+                model_file.object_crop(p, model_file.object_frame(p))
+
     def test_bad_files(self):
         with tempfile.TemporaryDirectory() as d:
             p = os.path.join(d, "m.npt")
