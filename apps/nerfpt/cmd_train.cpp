@@ -10,13 +10,13 @@
 #include <memory>
 #include <optional>
 
+#include "backend_option.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "dataset_loading.h"
 #include "interrupt.h"
 #include "nerf/dataset.h"
 #include "nerf/model_file.h"
-#include "backend_option.h"
 #include "nerf/trainer.h"
 #include "relight_stage.h"
 #include "status_line.h"
@@ -29,7 +29,8 @@ constexpr uint64_t k_default_steps = 3000;
 }
 
 CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
-    CLI::App* cmd = app.add_subcommand("train", "Train a NeRF from posed images (transforms.json) on a GPU or the CPU");
+    CLI::App* cmd =
+        app.add_subcommand("train", "Train a NeRF from posed images (transforms.json) on a GPU or the CPU");
     cmd->footer(
         "The model follows instant-ngp's NeRF: a hash grid of 16 levels x 2 features on the CPU, 8 x 4 on\n"
         "a GPU (2^19 entries per level, base resolution 16, finest 2048 x aabb_scale), a 1x64 density MLP\n"
@@ -63,27 +64,31 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "Steps between checkpoints (default: the config's, 500)")
         ->check(CLI::Range(1, 100000000));
     add_backend_option(cmd, args.backend);
-    cmd->add_flag("--relightable", args.relightable,
-                  "After training, fit albedo, roughness and normals and estimate the capture light, so that "
-                  "renders light the object with the scene's lights (with --resume: adds them to a trained model)");
+    cmd->add_flag(
+        "--relightable", args.relightable,
+        "After training, fit albedo, roughness and normals and estimate the capture light, so that "
+        "renders light the object with the scene's lights (with --resume: adds them to a trained model)");
     cmd->add_option("--relight-steps", args.relight.steps,
                     fmt::format("Optimiser steps of the relight stage (default: {})", args.relight.steps))
         ->check(CLI::Range(uint64_t(1), uint64_t(10000000)));
-    cmd->add_option("--relight-points", args.relight.points,
-                    fmt::format("Surface points the relight stage fits, one per training ray that hits the object "
-                                "(default: {} on a GPU, {} on the CPU)",
-                                k_relight_points_gpu, k_relight_points_cpu))
+    cmd->add_option(
+           "--relight-points", args.relight.points,
+           fmt::format("Surface points the relight stage fits, one per training ray that hits the object "
+                       "(default: {} on a GPU, {} on the CPU)",
+                       k_relight_points_gpu, k_relight_points_cpu))
         ->check(CLI::Range(64, 1 << 22));
-    cmd->add_option("--relight-directions", args.relight.directions,
-                    fmt::format("Light directions per surface point (visibility and indirect light toward each; "
-                                "default: {} on a GPU, {} on the CPU)",
-                                k_relight_directions_gpu, k_relight_directions_cpu))
+    cmd->add_option(
+           "--relight-directions", args.relight.directions,
+           fmt::format("Light directions per surface point (visibility and indirect light toward each; "
+                       "default: {} on a GPU, {} on the CPU)",
+                       k_relight_directions_gpu, k_relight_directions_cpu))
         ->check(CLI::Range(4, 1024));
-    cmd->add_option("--relight-event-draws", args.relight.event_draws,
-                    fmt::format("Events drawn per surface point along its camera ray, as the renderer draws them; "
-                                "the fit queries the fields at one of them each time (1: a single fixed point, "
-                                "which the fine levels memorise; default: {})",
-                                args.relight.event_draws))
+    cmd->add_option(
+           "--relight-event-draws", args.relight.event_draws,
+           fmt::format("Events drawn per surface point along its camera ray, as the renderer draws them; "
+                       "the fit queries the fields at one of them each time (1: a single fixed point, "
+                       "which the fine levels memorise; default: {})",
+                       args.relight.event_draws))
         ->check(CLI::Range(1, 64));
     cmd->add_option("--relight-normals", args.relight_normals,
                     "The surface normal the stage shades with and the normal field learns: 'depth' (crossed "
@@ -93,21 +98,30 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     fmt::format("Surface points per optimiser step (default: {} on a GPU, {} on the CPU)",
                                 k_relight_batch_gpu, k_relight_batch_cpu))
         ->check(CLI::Range(16, 1 << 20));
-    cmd->add_option("--relight-normal-smoothing", args.relight.normal_smoothing,
-                    fmt::format("Radius (model units, the unit cube) over which the surface normals are averaged, "
-                                "edges kept: removes the small bumps a NeRF carves into its density (default: {}; "
-                                "0 turns it off)",
-                                args.relight.normal_smoothing))
+    cmd->add_option(
+           "--relight-normal-smoothing", args.relight.normal_smoothing,
+           fmt::format("Radius (model units, the unit cube) over which the surface normals are averaged, "
+                       "edges kept: removes the small bumps a NeRF carves into its density (default: {}; "
+                       "0 turns it off)",
+                       args.relight.normal_smoothing))
         ->check(CLI::Range(0.0f, 0.5f));
-    cmd->add_option("--relight-table", args.relight.table_log2,
-                    fmt::format("log2 of the hash entries per level of the albedo/roughness/normal grid: more "
-                                "resolves finer texture, at 12 x 2 x 4 bytes x 2^N of model size (default: {})",
-                                args.relight.table_log2))
+    cmd->add_option(
+           "--relight-pixels", args.relight.borrowing_pixels,
+           "Training pixels that supervise the albedo without light directions of their own: each "
+           "borrows the normal and light of the nearest surface point (one camera ray each instead of "
+           "--relight-directions light rays; default: 0)")
+        ->check(CLI::Range(0, 1 << 24));
+    cmd->add_option(
+           "--relight-table", args.relight.table_log2,
+           fmt::format("log2 of the hash entries per level of the albedo/roughness/normal grid: more "
+                       "resolves finer texture, at 12 x 2 x 4 bytes x 2^N of model size (default: {})",
+                       args.relight.table_log2))
         ->check(CLI::Range(12, 24));
-    cmd->add_option("--relight-resolution", args.relight.finest_resolution,
-                    fmt::format("Finest resolution of that grid across the model's box (times aabb_scale): the "
-                                "smallest texture detail the albedo can hold (default: {})",
-                                args.relight.finest_resolution))
+    cmd->add_option(
+           "--relight-resolution", args.relight.finest_resolution,
+           fmt::format("Finest resolution of that grid across the model's box (times aabb_scale): the "
+                       "smallest texture detail the albedo can hold (default: {})",
+                       args.relight.finest_resolution))
         ->check(CLI::Range(32.0f, 8192.0f));
     cmd->add_flag("--resume", args.resume, "Continue training the model in --output where it stopped");
     cmd->add_flag("--force", args.force, "Overwrite --output if it exists (without --resume)")
@@ -137,9 +151,10 @@ void check_output(const fs::path& out, bool resume, bool force) {
 void show_train_progress(StatusLine& line, const nerf::StepStats& s, double fraction, double rays_per_s,
                          double elapsed, bool force) {
     if (!line.due(force)) return;
-    line.print(fmt::format("train {} {:3.0f}% step {} loss {:.5f} psnr {:.2f} dB {} rays/s {} samples/step {}",
-                           format_bar(fraction, 20), 100.0 * fraction, s.step, s.loss, nerf::psnr_from_mse(s.mse),
-                           format_count(rays_per_s), format_count(double(s.samples)), format_eta_clock(elapsed)));
+    line.print(
+        fmt::format("train {} {:3.0f}% step {} loss {:.5f} psnr {:.2f} dB {} rays/s {} samples/step {}",
+                    format_bar(fraction, 20), 100.0 * fraction, s.step, s.loss, nerf::psnr_from_mse(s.mse),
+                    format_count(rays_per_s), format_count(double(s.samples)), format_eta_clock(elapsed)));
 }
 
 }  // namespace
@@ -170,7 +185,8 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         const nerf::NerfConfig base =
             backend == nerf::Backend::cuda ? nerf::cuda_default_config() : nerf::NerfConfig{};
         const nerf::NerfConfig config = args.config.empty() ? base : nerf::load_config(args.config, base);
-        model = nerf::create_model(config, data.aabb_scale, nerf::ngp_world_to_model(data.scale, data.offset));
+        model =
+            nerf::create_model(config, data.aabb_scale, nerf::ngp_world_to_model(data.scale, data.offset));
     }
     // Where the cameras looked: a bake averages the colour over these directions (bake/bake_grid.h). Also set
     // when resuming a model written before they were stored.
@@ -216,10 +232,9 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         const double rate = stats.seconds > 0 ? stats.rays / stats.seconds : 0.0;
         rays_ema = rays_ema == 0 ? rate : 0.9 * rays_ema + 0.1 * rate;
         const double elapsed = model.training->elapsed_seconds;
-        const double fraction =
-            args.seconds > 0 && !args.steps
-                ? std::min(1.0, elapsed / args.seconds)
-                : std::min(1.0, double(trainer.steps_done()) / double(target_steps));
+        const double fraction = args.seconds > 0 && !args.steps
+                                    ? std::min(1.0, elapsed / args.seconds)
+                                    : std::min(1.0, double(trainer.steps_done()) / double(target_steps));
         show_train_progress(progress, stats, fraction, rays_ema, elapsed, false);
         if (!std::isfinite(stats.loss))
             throw Error("training diverged at step " + std::to_string(stats.step) +
@@ -246,9 +261,10 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     }
     const auto& pt = phase_total;
     if (backend == nerf::Backend::cpu)
-        spdlog::debug("time per phase: march {:.1f} s, field forward {:.1f} s, loss {:.1f} s, MLP backward {:.1f} s, "
-                  "hash-grid backward {:.1f} s, Adam {:.1f} s, occupancy grid {:.1f} s",
-                  pt.march, pt.forward, pt.loss, pt.backward, pt.grid_backward, pt.adam, pt.occupancy);
+        spdlog::debug(
+            "time per phase: march {:.1f} s, field forward {:.1f} s, loss {:.1f} s, MLP backward {:.1f} s, "
+            "hash-grid backward {:.1f} s, Adam {:.1f} s, occupancy grid {:.1f} s",
+            pt.march, pt.forward, pt.loss, pt.backward, pt.grid_backward, pt.adam, pt.occupancy);
     save();
     interrupts.set_cooperative(false);
     fmt::print("wrote {} after {} steps ({} of training), last batch psnr {:.2f} dB\n", out.string(),

@@ -22,22 +22,30 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     const bool gpu = options.backend != nerf::Backend::cpu;
     nerf::RelightSampleSettings ss;
     ss.points = options.points ? options.points : (gpu ? k_relight_points_gpu : k_relight_points_cpu);
-    ss.directions = options.directions ? options.directions : (gpu ? k_relight_directions_gpu : k_relight_directions_cpu);
+    ss.directions =
+        options.directions ? options.directions : (gpu ? k_relight_directions_gpu : k_relight_directions_cpu);
     ss.event_draws = options.event_draws;
     ss.normals = options.normals;
     ss.normal_smoothing = options.normal_smoothing;
+    ss.borrowing_pixels = options.borrowing_pixels;
     ss.seed = model.config.training.seed;
     StatusLine line(stream_is_tty(stderr), options.quiet);
     std::unique_ptr<nerf::FieldQuery> query = nerf::make_field_query(options.backend, model);
-    const nerf::RelightSamples samples = nerf::gather_relight_samples(model, data, *query, ss, [&](size_t done, size_t total) {
-        line.show(fmt::format("relight: surface points {} {:3.0f}% {}/{}", format_bar(double(done) / total, 20),
-                              100.0 * done / total, done, total),
-                  done == total);
-    });
+    const nerf::RelightSamples samples =
+        nerf::gather_relight_samples(model, data, *query, ss, [&](size_t done, size_t total) {
+            line.show(fmt::format("relight: surface points {} {:3.0f}% {}/{}",
+                                  format_bar(double(done) / total, 20), 100.0 * done / total, done, total),
+                      done == total);
+        });
     line.finish();
     const double gather_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    spdlog::info("relight: {} surface points x {} directions in {:.1f} s", samples.size(), samples.directions,
-                 gather_s);
+    if (samples.lit < samples.size())
+        spdlog::info(
+            "relight: {} surface points x {} directions and {} pixels borrowing their light in {:.1f} s",
+            samples.lit, samples.directions, samples.size() - samples.lit, gather_s);
+    else
+        spdlog::info("relight: {} surface points x {} directions in {:.1f} s", samples.size(),
+                     samples.directions, gather_s);
     if (interrupts.stop_requested()) return false;
 
     nerf::RelightTrainSettings ts;
@@ -50,9 +58,10 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     while (trainer.steps_done() < options.steps) {
         st = trainer.step();
         const double frac = double(trainer.steps_done()) / double(options.steps);
-        line.show(fmt::format("relight: fit {} {:3.0f}% step {} psnr {:.2f} dB normal {:.4f}", format_bar(frac, 20),
-                              100.0 * frac, st.step, nerf::psnr_from_mse(st.mse), st.normal_loss),
-                  trainer.steps_done() == options.steps);
+        line.show(
+            fmt::format("relight: fit {} {:3.0f}% step {} psnr {:.2f} dB normal {:.4f}", format_bar(frac, 20),
+                        100.0 * frac, st.step, nerf::psnr_from_mse(st.mse), st.normal_loss),
+            trainer.steps_done() == options.steps);
         if (interrupts.stop_requested()) {
             line.finish();
             return false;

@@ -1,6 +1,6 @@
-// `nerfpt train --relightable`: the relight stage after the NeRF's own training (nerf/relight/): surface points
-// from the training images, then the intrinsic fields, the capture environment and the exposures, with progress
-// lines; the result goes into the model's relight section.
+// `nerfpt train --relightable`: the relight stage after the NeRF's own training (nerf/relight/): surface
+// points from the training images, then the intrinsic fields, the capture environment and the exposures, with
+// progress lines; the result goes into the model's relight section.
 #pragma once
 
 #include <cstdint>
@@ -14,10 +14,10 @@ namespace npt::cli {
 
 class InterruptGuard;
 
-// The defaults of points, directions and batch per backend. Measured on dev (docs/benchmarks.md, issue 24): on the
-// GPU, 16x more points at a quarter of the directions bought 2 dB of albedo, and 4x more again at half the
-// directions (1 M x 8) another 0.9 dB and 1 degree of normals for 11 s more; the CPU's keep the gather to minutes
-// on 2 cores.
+// The defaults of points, directions and batch per backend. Measured on dev (docs/benchmarks.md, issue 24):
+// on the GPU, 16x more points at a quarter of the directions bought 2 dB of albedo, and 4x more again at half
+// the directions (1 M x 8) another 0.9 dB and 1 degree of normals for 11 s more; the CPU's keep the gather to
+// minutes on 2 cores.
 constexpr int k_relight_points_gpu = 1048576, k_relight_points_cpu = 32768;
 constexpr int k_relight_directions_gpu = 8, k_relight_directions_cpu = 16;
 constexpr int k_relight_batch_gpu = 4096, k_relight_batch_cpu = 1024;
@@ -30,8 +30,11 @@ struct RelightStageOptions {
     int event_draws = nerf::RelightSampleSettings{}.event_draws;
     nerf::NormalEstimator normals = nerf::RelightSampleSettings{}.normals;
     float normal_smoothing = nerf::RelightSampleSettings{}.normal_smoothing;
-    int table_log2 = nerf::IntrinsicConfig{}.grid.log2_table_size;  // hash entries per level of the intrinsic grid
-    float finest_resolution = nerf::IntrinsicConfig{}.finest_resolution;  // of the intrinsic grid, x aabb_scale
+    int borrowing_pixels = nerf::RelightSampleSettings{}.borrowing_pixels;
+    int table_log2 =
+        nerf::IntrinsicConfig{}.grid.log2_table_size;  // hash entries per level of the intrinsic grid
+    float finest_resolution =
+        nerf::IntrinsicConfig{}.finest_resolution;  // of the intrinsic grid, x aabb_scale
     bool quiet = false;
     nerf::Backend backend = nerf::Backend::cpu;  // where the NeRF is evaluated while gathering surface points
 };

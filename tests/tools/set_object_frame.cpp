@@ -1,7 +1,7 @@
-// Gives a trained model an object frame (nerf/object_frame.h), as `nerfpt capture` does, so that tests outside
-// C++ (the Blender add-on's) can import a model that stands somewhere without running a whole capture. The frame
-// is the OBJF section's JSON (docs/formats.md), checked by the model file's own reader. Usage:
-// nerfpt_set_object_frame MODEL.npt FRAME.json OUT.npt
+// Gives a trained model an object frame (nerf/object_frame.h), as `nerfpt capture` does, so that tests
+// outside C++ (the Blender add-on's) can import a model that stands somewhere without running a whole
+// capture. The frame is the OBJF section's JSON (docs/formats.md), checked by the model file's own reader.
+// Usage: nerfpt_set_object_frame MODEL.npt FRAME.json OUT.npt
 #include <cstdio>
 #include <exception>
 #include <fstream>

@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/error.h"
@@ -18,7 +19,7 @@ namespace {
 
 constexpr float k_two_pi = 6.28318530717959f;
 constexpr float k_golden = 0.6180339887498949f;
-constexpr int k_tries_per_point = 16;  // pixels drawn for a point before giving up on it
+constexpr int k_tries_per_point = 16;        // pixels drawn for a point before giving up on it
 constexpr size_t k_points_per_round = 2048;  // points whose light directions are marched together
 
 struct Point {
@@ -33,7 +34,8 @@ struct Point {
 // Draws 2..D of each found point's event: its camera ray marched again with a new lattice offset and target
 // depth (a ray that finds no event this time keeps the first draw there).
 void draw_more_events(const NerfModel& model, FieldQuery& query, const std::vector<Point>& points,
-                      const std::vector<size_t>& found, std::vector<Pcg32>& rngs, int draws, RelightSamples& out) {
+                      const std::vector<size_t>& found, std::vector<Pcg32>& rngs, int draws,
+                      RelightSamples& out) {
     const size_t n = found.size(), extra = size_t(draws - 1);
     out.draws = draws;
     out.draw.resize(n * size_t(draws));
@@ -56,13 +58,145 @@ void draw_more_events(const NerfModel& model, FieldQuery& query, const std::vect
         }
 }
 
+// The lit points in a uniform grid of cell `radius`, for the nearest one to a position (27 cells a query).
+class PointGrid {
+  public:
+    PointGrid(const std::vector<Vec3>& points, const std::vector<Vec3>& normals, float radius)
+        : m_points(points),
+          m_normals(normals),
+          m_radius(radius),
+          m_inv(1.0f / radius),
+          m_keyed(points.size()) {
+        tbb::parallel_for(size_t(0), points.size(), [&](size_t i) {
+            m_keyed[i] = {key_of(cell_of(points[i])), uint32_t(i)};
+        });
+        std::sort(m_keyed.begin(), m_keyed.end());
+    }
+
+    // The nearest point within the radius whose normal faces wo (normal . wo > 0.1); -1 where there is none.
+    int64_t nearest_facing(Vec3 p, Vec3 wo) const {
+        const std::array<int64_t, 3> c = cell_of(p);
+        float best = m_radius * m_radius;
+        int64_t found = -1;
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const uint64_t key = key_of({c[0] + dx, c[1] + dy, c[2] + dz});
+                    auto it =
+                        std::lower_bound(m_keyed.begin(), m_keyed.end(), std::make_pair(key, uint32_t(0)));
+                    for (; it != m_keyed.end() && it->first == key; ++it) {
+                        const Vec3 d = m_points[it->second] - p;
+                        const float d2 = dot(d, d);
+                        if (d2 < best && dot(m_normals[it->second], wo) > 0.1f) {
+                            best = d2;
+                            found = it->second;
+                        }
+                    }
+                }
+        return found;
+    }
+
+  private:
+    std::array<int64_t, 3> cell_of(Vec3 p) const {
+        return {int64_t(std::floor(p.x * m_inv)), int64_t(std::floor(p.y * m_inv)),
+                int64_t(std::floor(p.z * m_inv))};
+    }
+    static uint64_t key_of(const std::array<int64_t, 3>& c) {
+        return (uint64_t(c[0] & 0x1fffff) << 42) | (uint64_t(c[1] & 0x1fffff) << 21) |
+               uint64_t(c[2] & 0x1fffff);
+    }
+
+    std::vector<Vec3> m_points, m_normals;
+    float m_radius, m_inv;
+    std::vector<std::pair<uint64_t, uint32_t>> m_keyed;
+};
+
+// Appends settings.borrowing_pixels samples to `out` (whose lit points are complete): a camera ray through a
+// random opaque training pixel, its event and event draws as for the points, the light of the nearest lit
+// point.
+void add_borrowing_pixels(const NerfModel& model, const Dataset& data, FieldQuery& query,
+                          const RelightSampleSettings& settings, uint8_t min_alpha, RelightSamples& out) {
+    const size_t wanted = size_t(settings.borrowing_pixels), draws = size_t(out.draws);
+    const Mat4& w2m = model.world_to_model;
+    out.lit = out.size();
+    const PointGrid lit_points(out.position, out.normal, settings.borrow_radius);
+    constexpr size_t k_round = size_t(1) << 18;
+    Pcg32 rng(mix64(settings.seed ^ 0x626f72726f77ULL), 0);
+    size_t added = 0;
+    for (int attempt = 0; attempt < k_tries_per_point && added < wanted; ++attempt) {
+        const size_t n = std::min(k_round, wanted - added);
+        std::vector<WaveRay> rays;
+        std::vector<Rgb> target;
+        std::vector<uint32_t> image;
+        for (size_t i = 0; i < n * 2 && rays.size() < n; ++i) {  // about half the pixels are transparent
+            const uint32_t img = rng.next_u32() % uint32_t(data.cameras.size());
+            const float px = rng.next_float() * float(data.width), py = rng.next_float() * float(data.height);
+            const float jitter = rng.next_float(), u_event = rng.next_float();
+            const int ix = std::min(int(px), data.width - 1), iy = std::min(int(py), data.height - 1);
+            const uint8_t* pix = data.image(img) + (size_t(iy) * data.width + ix) * 4;
+            if (pix[3] < min_alpha) continue;
+            const Ray world = generate_pixel_ray(data.cameras[img], px, py);
+            WaveRay r;
+            r.ray = Ray{w2m.transform_point(world.o), normalize(w2m.transform_vector(world.d))};
+            r.jitter = jitter;
+            r.tau_target = -std::log1p(-std::min(u_event, 0.999999f));
+            rays.push_back(r);
+            target.push_back(Rgb(srgb_to_linear(pix[0] / 255.0f), srgb_to_linear(pix[1] / 255.0f),
+                                 srgb_to_linear(pix[2] / 255.0f)));
+            image.push_back(img);
+        }
+        march_wavefront(model, query, rays, WaveMode::event);
+        std::vector<size_t> hit;
+        std::vector<Vec3> at, wo;
+        for (size_t i = 0; i < rays.size(); ++i)
+            if (rays[i].has_event) {
+                hit.push_back(i);
+                at.push_back(rays[i].event_position);
+                wo.push_back(-rays[i].ray.d);
+            }
+        std::vector<int64_t> donor(hit.size());
+        tbb::parallel_for(size_t(0), hit.size(),
+                          [&](size_t h) { donor[h] = lit_points.nearest_facing(at[h], wo[h]); });
+        // The further event draws of the pixels that found a donor, on their own camera rays.
+        std::vector<size_t> kept;
+        for (size_t h = 0; h < hit.size() && added + kept.size() < wanted; ++h)
+            if (donor[h] >= 0) kept.push_back(h);
+        std::vector<WaveRay> more(kept.size() * (draws - 1));
+        for (size_t j = 0; j < kept.size(); ++j)
+            for (size_t m = 0; m + 1 < draws; ++m) {
+                WaveRay& r = more[j * (draws - 1) + m];
+                r.ray = rays[hit[kept[j]]].ray;
+                r.jitter = rng.next_float();
+                r.tau_target = -std::log1p(-std::min(rng.next_float(), 0.999999f));
+            }
+        march_wavefront(model, query, more, WaveMode::event);
+        for (size_t j = 0; j < kept.size(); ++j) {
+            const size_t h = kept[j], i = hit[h];
+            out.position.push_back(at[h]);
+            out.wo.push_back(wo[h]);
+            out.target.push_back(target[i]);
+            out.image.push_back(image[i]);
+            out.donor.push_back(uint32_t(donor[h]));
+            out.draw.push_back(at[h]);
+            for (size_t m = 0; m + 1 < draws; ++m) {
+                const WaveRay& r = more[j * (draws - 1) + m];
+                out.draw.push_back(r.has_event ? r.event_position : at[h]);
+            }
+        }
+        added += kept.size();
+    }
+}
+
 }  // namespace
 
 RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& data, FieldQuery& query,
-                                      const RelightSampleSettings& settings, const RelightProgressFn& progress) {
+                                      const RelightSampleSettings& settings,
+                                      const RelightProgressFn& progress) {
     if (data.cameras.empty()) throw Error("the relight stage needs training images; the data set has none");
     if (settings.points < 1 || settings.directions < 1 || settings.event_draws < 1)
         throw Error("relight: points, directions and event draws must be at least 1");
+    if (settings.borrowing_pixels < 0 || (settings.borrowing_pixels > 0 && !(settings.borrow_radius > 0.0f)))
+        throw Error("relight: borrowing pixels need a positive count and borrow radius");
     const size_t n_points = size_t(settings.points);
     const int K = settings.directions;
     const Mat4& w2m = model.world_to_model;
@@ -71,8 +205,8 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
     std::vector<Pcg32> rngs(n_points);
     for (size_t s = 0; s < n_points; ++s) rngs[s] = Pcg32(mix64(settings.seed ^ 0x72656c69676874ULL), s);
 
-    // 1. Events: a camera ray through a random opaque pixel per point, its event drawn from the volume weights;
-    // points whose ray found nothing try another pixel, up to k_tries_per_point times.
+    // 1. Events: a camera ray through a random opaque pixel per point, its event drawn from the volume
+    // weights; points whose ray found nothing try another pixel, up to k_tries_per_point times.
     std::vector<size_t> todo(n_points);
     for (size_t s = 0; s < n_points; ++s) todo[s] = s;
     for (int attempt = 0; attempt < k_tries_per_point && !todo.empty(); ++attempt) {
@@ -128,7 +262,8 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
                 missing_at.push_back(at[h]);
                 missing_toward.push_back(toward[h]);
             }
-        const std::vector<Vec3> fallback = density_normals(query, missing_at, missing_toward, settings.normal_step);
+        const std::vector<Vec3> fallback =
+            density_normals(query, missing_at, missing_toward, settings.normal_step);
         for (size_t m = 0; m < missing.size(); ++m) normal[missing[m]] = fallback[m];
         for (size_t h = 0; h < hit.size(); ++h) {
             if (!(dot(normal[h], normal[h]) > 0.0f)) continue;
@@ -203,6 +338,7 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
         }
         if (progress) progress(end, n);
     }
+    if (settings.borrowing_pixels > 0) add_borrowing_pixels(model, data, query, settings, min_alpha, out);
     return out;
 }
 

@@ -1,10 +1,10 @@
-// The relight stage's data: points on the object seen by training pixels, each with what the trained NeRF says
-// about its surroundings. One point per training ray, drawn from the ray's volume weights exactly as the relit
-// renderer draws its scattering events; at each point the density normal and, for a fixed set of directions over
-// its hemisphere, the transmittance toward the environment and the radiance the NeRF sends back from that
-// direction (the object's own light under the capture illumination: the indirect light). Computed once, before
-// the optimisation, with the wavefront marcher (the field evaluated by `query`: CPU or GPU), deterministically
-// for a seed.
+// The relight stage's data: points on the object seen by training pixels, each with what the trained NeRF
+// says about its surroundings. One point per training ray, drawn from the ray's volume weights exactly as the
+// relit renderer draws its scattering events; at each point the density normal and, for a fixed set of
+// directions over its hemisphere, the transmittance toward the environment and the radiance the NeRF sends
+// back from that direction (the object's own light under the capture illumination: the indirect light).
+// Computed once, before the optimisation, with the wavefront marcher (the field evaluated by `query`: CPU or
+// GPU), deterministically for a seed.
 #pragma once
 
 #include <cstdint>
@@ -24,40 +24,57 @@ enum class NormalEstimator {
 };
 
 struct RelightSampleSettings {
-    int points = 16384;           // surface points (training rays that hit the object)
-    int directions = 16;          // light directions per point, stratified over the normal's hemisphere
+    int points = 16384;   // surface points (training rays that hit the object)
+    int directions = 16;  // light directions per point, stratified over the normal's hemisphere
     NormalEstimator normals = NormalEstimator::depth_stencil;
-    float normal_step = 0.004f;   // model units: central-difference step of the density gradient
-    float normal_pixels = 2.0f;   // the depth stencil's half width in pixels
+    float normal_step = 0.004f;      // model units: central-difference step of the density gradient
+    float normal_pixels = 2.0f;      // the depth stencil's half width in pixels
     float normal_smoothing = 0.02f;  // model units: radius of smooth_normals over the points (0: off)
-    float min_alpha = 0.99f;      // pixels more transparent than this in the image are not used
+    float min_alpha = 0.99f;         // pixels more transparent than this in the image are not used
     // Events drawn per point on its camera ray: the fit queries the intrinsic fields at one of them each time
     // it uses the point. The renderer's events spread over the depth of the surface; fitted at a single draw
     // per ray, the hash grid's fine levels memorise those positions and return noise between them.
     int event_draws = 4;
+    // Pixels that supervise the fields without light directions of their own: each borrows the normal, the
+    // directions, the visibility and the indirect light of the nearest point within borrow_radius (model
+    // units) that faces its camera. The light varies slowly over a surface, the albedo does not: this buys
+    // albedo supervision at the cost of one camera ray per pixel instead of `directions` light rays.
+    int borrowing_pixels = 0;
+    float borrow_radius = 0.02f;
     uint64_t seed = 1;
 };
 
 struct RelightSamples {
     int directions = 0;
     // Per point, model space.
-    std::vector<Vec3> position;  // the scattering event (shaded: normal, visibility and indirect light are its)
-    int draws = 1;               // events drawn per point (settings.event_draws)
-    std::vector<Vec3> draw;      // [point * draws + m]: where the fields are queried; m = 0 is `position`
-    std::vector<Vec3> wo;        // unit direction toward the camera
-    std::vector<Vec3> normal;    // the surface normal (settings.normals), unit, turned toward wo
-    std::vector<Rgb> target;     // the pixel's colour, linear
+    std::vector<Vec3>
+        position;              // the scattering event (shaded: normal, visibility and indirect light are its)
+    int draws = 1;             // events drawn per point (settings.event_draws)
+    std::vector<Vec3> draw;    // [point * draws + m]: where the fields are queried; m = 0 is `position`
+    std::vector<Vec3> wo;      // unit direction toward the camera
+    std::vector<Vec3> normal;  // lit points: the surface normal (settings.normals), unit, turned toward wo
+    std::vector<Rgb> target;   // the pixel's colour, linear
     std::vector<uint32_t> image;  // training image index
     // Per point and direction ([point * directions + k]).
-    std::vector<Vec3> dir;          // unit, model space
-    std::vector<float> visibility;  // transmittance through the model from the offset point to the environment
-    std::vector<Rgb> indirect;      // linear radiance arriving along -dir from the model itself
+    std::vector<Vec3> dir;  // unit, model space
+    std::vector<float>
+        visibility;             // transmittance through the model from the offset point to the environment
+    std::vector<Rgb> indirect;  // linear radiance arriving along -dir from the model itself
+
+    // Samples [0, lit) are points with light of their own; the rest are borrowing pixels
+    // (settings.borrowing_pixels), whose light is that of point donor[s - lit]. normal, dir, visibility and
+    // indirect hold the lit points' only.
+    size_t lit = 0;
+    std::vector<uint32_t> donor;
 
     size_t size() const { return position.size(); }
+    // The point whose normal and light sample s uses.
+    uint32_t light_of(size_t s) const { return s < lit || donor.empty() ? uint32_t(s) : donor[s - lit]; }
     // Draw m (taken modulo draws) of point s; `position` when the samples carry no draws.
     Vec3 draw_position(size_t s, uint32_t m) const {
-        return draws > 1 && draw.size() == position.size() * size_t(draws) ? draw[s * size_t(draws) + m % uint32_t(draws)]
-                                                                            : position[s];
+        return draws > 1 && draw.size() == position.size() * size_t(draws)
+                   ? draw[s * size_t(draws) + m % uint32_t(draws)]
+                   : position[s];
     }
 };
 

@@ -16,7 +16,7 @@ namespace npt::nerf {
 
 namespace {
 
-constexpr size_t k_chunk = 128;           // points per parallel task; gradients summed in chunk order
+constexpr size_t k_chunk = 128;            // points per parallel task; gradients summed in chunk order
 constexpr float k_roughness_step = 0.01f;  // finite difference of the BSDF in roughness
 constexpr float k_two_pi = 6.28318530717959f;
 
@@ -87,7 +87,8 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
     mean /= double(samples.size());
     const float env0 = std::log(float(std::max(mean, 1e-3) / 0.5));
     std::fill(m_params.begin() + m_env_offset, m_params.begin() + m_exposure_offset, env0);
-    m_adam = Adam(relight_optimizer(settings.learning_rate), m_total, m_layout.mlp_offset, m_layout.grid_offset);
+    m_adam =
+        Adam(relight_optimizer(settings.learning_rate), m_total, m_layout.mlp_offset, m_layout.grid_offset);
 }
 
 RelightStepStats RelightTrainer::step() {
@@ -158,21 +159,22 @@ RelightStepStats RelightTrainer::compute_gradient() {
         std::vector<float> wk(static_cast<size_t>(K));
         for (size_t i = 0; i < n; ++i) {
             const uint32_t s = pick[b + i];
+            const uint32_t L = S.light_of(s);  // whose normal and light directions (itself unless borrowing)
             const float* o = &ch.out[i * k_intrinsic_outputs];
             float* d_o = &ch.d_out[i * k_intrinsic_outputs];
             const IntrinsicSample is = intrinsic_from_outputs(o);
-            // Shaded with the density normal, which the predicted normal learns to follow (its own loss below):
-            // the photometric term then has an exact gradient and does not pull the normals toward whatever
-            // explains a shadow or a texture.
+            // Shaded with the density normal, which the predicted normal learns to follow (its own loss
+            // below): the photometric term then has an exact gradient and does not pull the normals toward
+            // whatever explains a shadow or a texture.
             const Vec3 wo_w = S.wo[s];
-            const Frame frame = Frame::from_z(S.normal[s]);
+            const Frame frame = Frame::from_z(S.normal[L]);
             const Vec3 wo = frame.to_local(wo_w);
             const float r = is.roughness;
             const float r2 = r + k_roughness_step <= 1.0f ? r + k_roughness_step : r - k_roughness_step;
             const float dr = r2 - r;
             Rgb acc_d(0.0f), acc_s(0.0f), acc_d2(0.0f), acc_s2(0.0f);
             for (int k = 0; k < K; ++k) {
-                const size_t sk = size_t(s) * K + k;
+                const size_t sk = size_t(L) * K + k;
                 const Vec3 wi = frame.to_local(S.dir[sk]);
                 wk[k] = 0.0f;
                 if (wi.z <= 0.0f || wo.z <= 0.0f) continue;
@@ -215,23 +217,24 @@ RelightStepStats RelightTrainer::compute_gradient() {
             // The environment texels each direction read.
             for (int k = 0; k < K; ++k) {
                 if (wk[k] == 0.0f) continue;
-                const size_t sk = size_t(s) * K + k;
+                const size_t sk = size_t(L) * K + k;
                 if (S.visibility[sk] <= 0.0f) continue;
                 const EnvTaps taps = env_taps(W, H, S.dir[sk]);
                 const Vec3 wi = frame.to_local(S.dir[sk]);
                 const BsdfSplit f = split_bsdf(r, wo, wi);
                 for (int ch3 = 0; ch3 < 3; ++ch3) {
-                    const float g = d_c[ch3] * e * (is.albedo[ch3] * f.diffuse + f.specular) * wk[k] *
-                                    S.visibility[sk];
+                    const float g =
+                        d_c[ch3] * e * (is.albedo[ch3] * f.diffuse + f.specular) * wk[k] * S.visibility[sk];
                     for (int j = 0; j < 4; ++j)
-                        ch.d_env[size_t(taps.index[j]) * 3 + ch3] += g * taps.weight[j] * env[taps.index[j]][ch3];
+                        ch.d_env[size_t(taps.index[j]) * 3 + ch3] +=
+                            g * taps.weight[j] * env[taps.index[j]][ch3];
                 }
             }
             // The normal output follows the density normal.
             const Vec3 raw(o[4], o[5], o[6]);
             const float len = std::max(length(raw), 1e-6f);
             const Vec3 nh = raw / len;
-            const Vec3 diff = nh - S.normal[s];
+            const Vec3 diff = nh - S.normal[L];
             ch.normal_loss += dot(diff, diff);
             const Vec3 d_nh = diff * (2.0f * m_settings.normal_weight * inv_batch);
             const Vec3 d_raw = (d_nh - nh * dot(nh, d_nh)) / len;
@@ -268,7 +271,8 @@ RelightStepStats RelightTrainer::compute_gradient() {
     const double grey = (mean_log[0] + mean_log[1] + mean_log[2]) / 3.0;
     for (size_t t = 0; t < n_env; ++t)
         for (int c = 0; c < 3; ++c)
-            grads[m_env_offset + 3 * t + c] += float(2.0 * m_settings.grey_weight * (mean_log[c] - grey) / n_env);
+            grads[m_env_offset + 3 * t + c] +=
+                float(2.0 * m_settings.grey_weight * (mean_log[c] - grey) / n_env);
     double prior = 0;
     for (int c = 0; c < 3; ++c) prior += m_settings.grey_weight * (mean_log[c] - grey) * (mean_log[c] - grey);
     if (m_settings.learn_exposure)
@@ -296,8 +300,9 @@ RelightFields RelightTrainer::fields(double seconds) const {
     const size_t n_env = size_t(m_settings.env_width) * m_settings.env_height;
     f.capture_env.texels.resize(n_env);
     for (size_t t = 0; t < n_env; ++t)
-        f.capture_env.texels[t] = Rgb(std::exp(avg[m_env_offset + 3 * t]), std::exp(avg[m_env_offset + 3 * t + 1]),
-                                      std::exp(avg[m_env_offset + 3 * t + 2]));
+        f.capture_env.texels[t] =
+            Rgb(std::exp(avg[m_env_offset + 3 * t]), std::exp(avg[m_env_offset + 3 * t + 1]),
+                std::exp(avg[m_env_offset + 3 * t + 2]));
     f.exposure.resize(m_images);
     for (size_t i = 0; i < m_images; ++i) f.exposure[i] = Rgb(std::exp(avg[m_exposure_offset + i]));
     f.steps = steps_done();
