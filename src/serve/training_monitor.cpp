@@ -381,7 +381,9 @@ void TrainingMonitor::run() {
         try {
             if (start) {
                 load_held_out(*start);
-                m_next_snapshot = Clock::now();  // the first snapshot as soon as the views are there
+                // Not at once: a model of a few steps, its occupancy grid still full, is the slowest to render.
+                m_next_snapshot = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                     std::chrono::duration<double>(m_options.min_eval_interval));
             }
             if (snapshot) {
                 snapshot->renderer = nerf::make_view_renderer(m_start->backend, snapshot->model, nerf::ViewPrecision::fp32);
@@ -429,7 +431,8 @@ void TrainingMonitor::load_held_out(const nerf::TrainingStart& start) {
         throw Error("no views to evaluate");
     }
     const int side = std::max(held->data.width, held->data.height);
-    const int factor = std::max(1, (side + m_options.eval_side - 1) / std::max(1, m_options.eval_side));
+    const int eval_side = m_options.eval_side > 0 ? m_options.eval_side : start.backend == nerf::Backend::cpu ? 96 : 160;
+    const int factor = std::max(1, (side + eval_side - 1) / eval_side);
     if (factor > 1) nerf::downscale_dataset(held->data, factor);
     for (size_t i = 0; i < held->data.cameras.size(); ++i)
         held->truth.push_back(nerf::ground_truth_image(held->data, i, Rgb(1.0f)));

@@ -26,7 +26,7 @@ namespace npt::serve {
 struct TrainingMonitorOptions {
     std::string title = "nerfpt train";  // the page's heading
     int eval_views = 3;                  // held-out views whose PSNR is measured
-    int eval_side = 160;                 // longest side of the held-out renders, pixels
+    int eval_side = 0;                   // longest side of the held-out renders, pixels; 0: 96 on the CPU, 160 on a GPU
     int view_side = 192;                 // longest side of the orbit render, pixels
     double min_eval_interval = 10;       // seconds between snapshots, at least
     double max_eval_share = 0.05;        // snapshot + held-out renders, at most this share of the wall time

@@ -127,7 +127,8 @@ TEST(ServeTraining, PageGetsStatusHeldOutStripAndOrbitWhileACpuModelTrains) {
     EXPECT_GE(snapshots, 1);
     EXPECT_GE(monitor.evals_done(), 1u);
 
-    const json status = page.until("train", [](const json& m) { return finite_number(m["psnr"]); });
+    const json status =
+        page.until("train", [](const json& m) { return m["step"].get<uint64_t>() > 0 && finite_number(m["psnr"]); });
     EXPECT_GT(status["step"].get<uint64_t>(), 0u);
     EXPECT_TRUE(finite_number(status["loss"]));
     EXPECT_FALSE(status["points"]["step"].empty());
