@@ -41,7 +41,7 @@ function drawChart(canvas, series, { log = false } = {}) {
   g.fillStyle = '#999'; g.font = '11px system-ui'; g.textAlign = 'right'; g.textBaseline = 'middle';
   for (let k = 0; k <= 4; ++k) {
     const yv = y0 + (y1 - y0) * k / 4, yy = T + (1 - k / 4) * (H - T - B);
-    const label = log ? Number(Math.pow(10, yv).toPrecision(2)).toExponential(0) : yv.toFixed(1);
+    const label = log ? String(Number(Math.pow(10, yv).toPrecision(2))) : yv.toFixed(1);
     g.fillText(label, L - 4, yy);
     g.strokeStyle = '#2a2a2a'; g.beginPath(); g.moveTo(L, yy); g.lineTo(W - R, yy); g.stroke();
   }

@@ -157,7 +157,7 @@ void TrainingMonitor::on_start(const nerf::TrainingStart& start) {
         m_phase = "training";
         m_finished = false;
         m_state_dirty = true;
-        m_last_step_wall = Clock::now();
+        m_last_step_wall = m_started = Clock::now();
     }
     m_wake.notify_all();
 }
@@ -175,6 +175,11 @@ void TrainingMonitor::on_step(const nerf::StepStats& stats, double elapsed, doub
     m_loss = stats.loss;
     m_psnr = psnr;
     m_have_step = true;
+    if (stats.seconds > 0 && stats.rays > 0) {
+        const double sps = double(stats.marched) / stats.seconds, spr = double(stats.marched) / double(stats.rays);
+        m_samples_per_s = m_samples_per_s == 0 ? sps : 0.9 * m_samples_per_s + 0.1 * sps;
+        m_samples_per_ray = m_samples_per_ray == 0 ? spr : 0.9 * m_samples_per_ray + 0.1 * spr;
+    }
     if (!std::isfinite(stats.loss)) return;
     m_bucket_loss += stats.loss;
     m_bucket_psnr += psnr;
@@ -401,9 +406,23 @@ void TrainingMonitor::run() {
             std::lock_guard lock(m_mutex);
             if (start && !m_held) m_held_failed = true;  // no views to evaluate: do not try again
         }
-        if (!finished && m_held && Clock::now() >= m_next_snapshot && !m_want_snapshot) m_want_snapshot = true;
+        if (!finished && m_held && Clock::now() >= m_next_snapshot && !m_want_snapshot && first_eval_affordable())
+            m_want_snapshot = true;
         publish_status(false);
     }
+}
+
+// Before the first evaluation has been timed: its cost predicted from the training's own rate (a sample of a
+// render taken to cost as much as a sample of a training step), and it waits until that is at most
+// max_eval_share of the time trained so far. On a GPU this is at once; on 2 CPU cores, a model of a few dozen
+// steps (its occupancy grid still nearly full) can take seconds to render.
+bool TrainingMonitor::first_eval_affordable() const {
+    if (m_evals_done > 0 || !m_held) return true;
+    std::lock_guard lock(m_mutex);
+    if (m_samples_per_s <= 0) return false;
+    const double rays = double(m_held->data.cameras.size()) * m_held->data.width * m_held->data.height;
+    const double predicted = rays * m_samples_per_ray / m_samples_per_s;
+    return predicted <= m_options.max_eval_share * seconds_between(m_started, Clock::now());
 }
 
 void TrainingMonitor::load_held_out(const nerf::TrainingStart& start) {
@@ -431,7 +450,7 @@ void TrainingMonitor::load_held_out(const nerf::TrainingStart& start) {
         throw Error("no views to evaluate");
     }
     const int side = std::max(held->data.width, held->data.height);
-    const int eval_side = m_options.eval_side > 0 ? m_options.eval_side : start.backend == nerf::Backend::cpu ? 96 : 160;
+    const int eval_side = m_options.eval_side > 0 ? m_options.eval_side : start.backend == nerf::Backend::cpu ? 64 : 160;
     const int factor = std::max(1, (side + eval_side - 1) / eval_side);
     if (factor > 1) nerf::downscale_dataset(held->data, factor);
     for (size_t i = 0; i < held->data.cameras.size(); ++i)

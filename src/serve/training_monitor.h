@@ -26,7 +26,7 @@ namespace npt::serve {
 struct TrainingMonitorOptions {
     std::string title = "nerfpt train";  // the page's heading
     int eval_views = 3;                  // held-out views whose PSNR is measured
-    int eval_side = 0;                   // longest side of the held-out renders, pixels; 0: 96 on the CPU, 160 on a GPU
+    int eval_side = 0;                   // longest side of the held-out renders, pixels; 0: 64 on the CPU, 160 on a GPU
     int view_side = 192;                 // longest side of the orbit render, pixels
     double min_eval_interval = 10;       // seconds between snapshots, at least
     double max_eval_share = 0.05;        // snapshot + held-out renders, at most this share of the wall time
@@ -72,6 +72,7 @@ class TrainingMonitor final : public nerf::TrainingObserver, public PageHandler 
 
     void run();
     void load_held_out(const nerf::TrainingStart& start);
+    bool first_eval_affordable() const;
     void evaluate();
     void render_orbit();
     void publish_status(bool force);
@@ -89,6 +90,10 @@ class TrainingMonitor final : public nerf::TrainingObserver, public PageHandler 
     // Training status, written by on_step.
     uint64_t m_step = 0;
     double m_elapsed = 0, m_fraction = 0, m_loss = 0, m_psnr = 0, m_steps_per_s = 0;
+    // The training's field samples per second and per ray: what a held-out render of a model this far is expected
+    // to cost before the first one has been timed.
+    double m_samples_per_s = 0, m_samples_per_ray = 0;
+    std::chrono::steady_clock::time_point m_started{};
     std::chrono::steady_clock::time_point m_last_step_wall{};
     bool m_have_step = false;
     // History: each point the mean over `m_stride` steps.
