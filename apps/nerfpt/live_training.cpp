@@ -11,7 +11,7 @@ void add_live_serve_options(CLI::App* cmd, LiveServeArgs& args) {
     cmd->add_flag("--serve", args.enabled,
                   "Serve a live-training page while it trains (prints its URL): loss and PSNR over the steps, "
                   "steps/s, time left, PSNR of 3 held-out views (at most every --serve-eval-every seconds, and at most 5% "
-                  "of the time), "
+                  "of the time: --serve-eval-share), "
                   "truth | render | error of one of them, and the current model orbited from the page. After "
                   "training the page stays up until Ctrl-C");
     cmd->add_option("--host", args.host,
@@ -21,8 +21,12 @@ void add_live_serve_options(CLI::App* cmd, LiveServeArgs& args) {
         ->check(CLI::Range(0, 65535));
     cmd->add_option("--serve-eval-every", args.eval_every,
                     "With --serve: seconds between the held-out views' evaluations, at least (default: 10; they "
-                    "are spaced further when they would take over 5% of the time)")
+                    "are spaced further when they would take more than --serve-eval-share of the time)")
         ->check(CLI::Range(0.1, 1e6));
+    cmd->add_option("--serve-eval-share", args.eval_share,
+                    "With --serve: the largest share of the time the held-out evaluations may take, their cost "
+                    "predicted from the training's rate until the first is timed (default: 0.05)")
+        ->check(CLI::Range(0.001, 1.0));
 }
 
 LiveTraining::LiveTraining(const LiveServeArgs& args, const std::string& title) {
@@ -35,6 +39,7 @@ LiveTraining::LiveTraining(const LiveServeArgs& args, const std::string& title) 
     serve::TrainingMonitorOptions mo;
     mo.title = title;
     mo.min_eval_interval = args.eval_every;
+    mo.max_eval_share = args.eval_share;
     m_monitor = std::make_unique<serve::TrainingMonitor>(mo, *m_server);
     m_server->attach(m_monitor.get());
     m_monitor->start();

@@ -17,6 +17,7 @@ struct LiveServeArgs {
     std::string host = "127.0.0.1";
     int port = 7007;
     double eval_every = 10;  // seconds between held-out evaluations, at least
+    double eval_share = 0.05;  // their time, at most this share of the training's
 };
 
 // --serve, --host, --port on a subcommand.

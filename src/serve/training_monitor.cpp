@@ -512,7 +512,8 @@ void TrainingMonitor::evaluate() {
     msg["strip_width"] = m_held->data.width * 3;
     msg["strip_height"] = m_held->data.height;
     send(0, msg);
-    spdlog::debug("serve: held-out PSNR {:.2f} dB at step {} ({:.0f} ms)", mean, m_model->step, seconds * 1e3);
+    spdlog::debug("serve: held-out PSNR {:.2f} dB at step {} ({:.0f} ms; snapshots so far: {:.0f} ms in all)", mean,
+                  m_model->step, seconds * 1e3, snapshot_seconds * 1e3);
 }
 
 void TrainingMonitor::render_orbit() {

@@ -8,8 +8,8 @@ const { NERFPT, LEGO, WORK, SHOTS, CHROMIUM } = process.env;
 const fail = (msg) => { console.error('FAILED: ' + msg); process.exitCode = 1; throw new Error(msg); };
 const check = (ok, msg) => { if (!ok) fail(msg); console.log('ok: ' + msg); };
 
-const server = spawn(NERFPT, ['train', LEGO, '-o', `${WORK}/live.npt`, '--force', '--steps', '80', '--downscale', '8',
-  '--serve', '--port', '0', '--serve-eval-every', '2', '--threads', '2'], { stdio: ['ignore', 'pipe', 'inherit'] });
+const server = spawn(NERFPT, ['train', LEGO, '-o', `${WORK}/live.npt`, '--force', '--steps', '120', '--downscale', '8',
+  '--serve', '--port', '0', '--serve-eval-every', '2', '--serve-eval-share', '0.5', '--threads', '2'], { stdio: ['ignore', 'pipe', 'inherit'] });
 let out = '';
 const url = await new Promise((resolve, reject) => {
   server.stdout.on('data', (d) => { out += d; const m = out.match(/page at (http:\/\/\S+)/); if (m) resolve(m[1]); });
@@ -49,7 +49,7 @@ try {
   const e2 = await page.evaluate(() => window.nerfpt.lastEval);
   check(true, `the strip updated: step ${e1.step} -> ${e2.step}, PSNR ${e1.psnr.toFixed(2)} -> ${e2.psnr.toFixed(2)} dB`);
   await page.waitForFunction(() => window.nerfpt.finished === true, { timeout: 300000 });
-  await page.waitForFunction(() => window.nerfpt.lastEval && window.nerfpt.lastEval.step >= 80, { timeout: 120000 });
+  await page.waitForFunction(() => window.nerfpt.lastEval && window.nerfpt.lastEval.step >= 120, { timeout: 120000 });
   const banner = await page.evaluate(() => document.getElementById('banner').textContent);
   check(/finished/.test(banner), `the page says training finished ("${banner.slice(0, 40)}…")`);
   check(/stays up until Ctrl-C/.test(out), 'nerfpt keeps serving after training');
