@@ -39,6 +39,7 @@ namespace {
 // cannot resolve more detail, and smaller images load faster and take less memory.
 constexpr int k_auto_train_side = 400;
 constexpr int k_stages = 7;
+const char* const k_stage_names[k_stages] = {"curate", "poses", "object", "split", "train", "eval", "turntable"};
 
 // What `--force` removes: only what capture itself writes, never the whole folder.
 const std::vector<std::string> k_outputs = {
@@ -114,6 +115,8 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         "another\n"
         "--holdout-every redoes the split and retrains; curate and poses options take effect with --force,\n"
         "which starts over. Needs ffmpeg and colmap on PATH (Debian: apt-get install ffmpeg colmap).\n"
+        "With --serve, a page in the browser lists the stages and their times as they finish and shows the\n"
+        "training live (loss, held-out PSNR, truth | render | error); it stays up after the capture until Ctrl-C.\n"
         "Example: nerfpt capture Beer.mp4 -o beer --train-time 600");
     cmd->add_option("VIDEO", args.video, "Video walking around the object (anything ffmpeg decodes)")
         ->required();
@@ -180,6 +183,7 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         ->check(CLI::Range(0, 4096));
     cmd->add_flag("--force", args.force,
                   "Remove what an earlier capture wrote in the work folder, start over");
+    add_live_serve_options(cmd, args.serve);
     return cmd;
 }
 
@@ -210,6 +214,34 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         }
     }
     CaptureRecord record(work, args.video);
+    // --serve: the page lists the stages as they run and finish, and shows the training live.
+    std::unique_ptr<LiveTraining> live;
+    if (args.serve.enabled) live = std::make_unique<LiveTraining>(args.serve, "nerfpt capture " + args.video);
+    std::vector<std::string> stage_notes(k_stages);
+    auto publish_stages = [&](int running) {
+        if (!live) return;
+        nlohmann::json list = nlohmann::json::array();
+        for (int i = 0; i < k_stages; ++i) {
+            const std::string name = k_stage_names[size_t(i)];
+            const bool done = record.done(name);
+            const std::string state = i + 1 < running   ? (done ? "done" : "skipped")
+                                      : i + 1 == running ? "running"
+                                                         : (done ? "done" : "pending");
+            const nlohmann::json& r = record.stage(name);
+            list.push_back({{"name", name},
+                            {"state", state},
+                            {"note", stage_notes[size_t(i)]},
+                            {"seconds", r.contains("seconds") ? r["seconds"] : nlohmann::json(nullptr)}});
+        }
+        live->monitor().set_stages(std::move(list));
+        live->monitor().set_phase(running <= k_stages ? "capture: " + stage_notes[size_t(running - 1)]
+                                                       : "capture finished");
+    };
+    auto stage = [&](int k, const std::string& text) {
+        banner(global, k, text);
+        stage_notes[size_t(k - 1)] = text;
+        publish_stages(k);
+    };
     const fs::path frames = work / "frames", transforms = work / "transforms.json",
                    model = work / "model.npt";
     const std::string continue_hint =
@@ -217,9 +249,9 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
 
     // 1 curate
     if (record.done("curate")) {
-        banner(global, 1, "curate: done in an earlier run (frames/)");
+        stage(1, "curate: done in an earlier run (frames/)");
     } else {
-        banner(global, 1, "curate: choosing frames");
+        stage(1, "curate: choosing frames");
         record.forget_from("poses");  // new frames: every later stage runs again
         discard_trained(work, record);
         CurateArgs c;
@@ -241,9 +273,9 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
 
     // 2 poses
     if (record.done("poses")) {
-        banner(global, 2, "poses: done in an earlier run (transforms.json)");
+        stage(2, "poses: done in an earlier run (transforms.json)");
     } else {
-        banner(global, 2, "poses: COLMAP");
+        stage(2, "poses: COLMAP");
         record.forget_from("object");
         discard_trained(work, record);
         PosesArgs p;
@@ -283,9 +315,9 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
     if (record.done("object") && done_object.value("height_m", nlohmann::json(nullptr)) ==
                                      (args.height_m > 0 ? nlohmann::json(args.height_m) : nlohmann::json(nullptr)) &&
         (!done_object.value("found", false) || done_object.contains("top_reach"))) {
-        banner(global, 3, "object: done in an earlier run");
+        stage(3, "object: done in an earlier run");
     } else {
-        banner(global, 3, "object: supporting plane, up and the object's box");
+        stage(3, "object: supporting plane, up and the object's box");
         // Work folders from before the poses stage recorded its model: the usual place.
         std::string model_dir = record.stage("poses").value("model", "");
         if (model_dir.empty()) model_dir = fs::exists(work / "colmap" / "sparse_loops" / "0") ? "colmap/sparse_loops/0"
@@ -298,15 +330,15 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
     // 4 split
     const bool hold_out = args.holdout_every > 0;
     if (record.done("split") && record.stage("split").value("every", -1) == args.holdout_every) {
-        banner(global, 4, "split: done in an earlier run");
+        stage(4, "split: done in an earlier run");
     } else if (hold_out) {
-        banner(global, 4, fmt::format("split: holding out every {}th frame", args.holdout_every));
+        stage(4, fmt::format("split: holding out every {}th frame", args.holdout_every));
         const capture::SplitCounts n = capture::split_transforms(transforms, args.holdout_every);
         if (!global.quiet) fmt::print("{} training frames, {} held out\n", n.train, n.test);
         discard_trained(work, record);  // a model trained on another split has seen the held-out frames
         record.finish("split", {{"every", args.holdout_every}, {"train", n.train}, {"test", n.test}});
     } else {
-        banner(global, 4, "split: none (--holdout-every 0), training on every frame");
+        stage(4, "split: none (--holdout-every 0), training on every frame");
         for (const char* name : {"transforms_train.json", "transforms_test.json"}) {
             std::error_code ec;
             fs::remove(work / name, ec);
@@ -330,10 +362,10 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
     bool trained = false;  // in this run: the object's box is refined again from the new model
     if (record.done("train") && record.stage("train").value("target", nlohmann::json()) == train_target &&
         fs::exists(model, ec)) {
-        banner(global, 5, "train: done in an earlier run (model.npt)");
+        stage(5, "train: done in an earlier run (model.npt)");
     } else {
         const bool resume = fs::exists(model, ec);
-        banner(global, 5,
+        stage(5,
                fmt::format("train: {}{}", resume ? "continuing model.npt to " : "",
                            args.train_steps ? fmt::format("{} steps", args.train_steps)
                                             : fmt::format("{:.0f} s", args.train_seconds)));
@@ -353,6 +385,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         t.relightable = args.relightable;
         t.relight.steps = args.relight_steps;
         t.relight.points = args.relight_points;
+        if (live) t.observer = &live->monitor();
         const int rc = run_train(t, global, interrupts);
         if (rc != 0) return rc;
         trained = true;
@@ -381,11 +414,11 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
 
     // 6 eval
     if (!hold_out) {
-        banner(global, 6, "eval: skipped (no held-out frames)");
+        stage(6, "eval: skipped (no held-out frames)");
     } else if (record.done("eval")) {
-        banner(global, 6, "eval: done in an earlier run (eval/)");
+        stage(6, "eval: done in an earlier run (eval/)");
     } else {
-        banner(global, 6, "eval: rendering the held-out frames");
+        stage(6, "eval: rendering the held-out frames");
         EvalArgs e;
         e.model = model.string();
         e.data = work.string();
@@ -411,12 +444,12 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                                        : args.turntable_res;
     const nlohmann::json& done_turntable = record.stage("turntable");
     if (args.turntable_frames == 0) {
-        banner(global, 7, "turntable: skipped (--turntable-frames 0)");
+        stage(7, "turntable: skipped (--turntable-frames 0)");
     } else if (record.done("turntable") && done_turntable.value("frames", 0) == args.turntable_frames &&
                done_turntable.value("res", "") == res) {
-        banner(global, 7, "turntable: done in an earlier run (turntable.mp4)");
+        stage(7, "turntable: done in an earlier run (turntable.mp4)");
     } else {
-        banner(global, 7, "turntable: rendering turntable.mp4");
+        stage(7, "turntable: rendering turntable.mp4");
         ViewArgs v;
         v.model = model.string();
         v.output = (work / "turntable.mp4").string();
@@ -439,6 +472,10 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
     }
     fmt::print("\n{}\nwrote {} and {}\n", record.markdown(), record.path().string(),
                (work / "report.md").string());
+    if (live) {
+        publish_stages(k_stages + 1);
+        live->serve_until_interrupted();
+    }
     return 0;
 }
 

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common.h"
+#include "live_training.h"
 #include "relight_stage.h"
 
 namespace npt::cli {
@@ -42,6 +43,7 @@ struct CaptureArgs {
     int threads = 0;
     std::string backend;  // train/eval/turntable: "", cpu or cuda (backend_option.h)
     bool force = false;
+    LiveServeArgs serve;  // --serve: the live page (training, and the stages as they finish)
 };
 
 CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args);

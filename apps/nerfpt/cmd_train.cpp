@@ -40,6 +40,9 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
         "A checkpoint is written every training.checkpoint_interval steps (on a GPU: at most every 60 s\n"
         "unless --checkpoint-every is given) and on Ctrl-C (a second Ctrl-C quits at once); --resume\n"
         "continues from it (exactly on the CPU). A model trained on either backend resumes on the other.\n"
+        "With --serve, a page in the browser shows the training live (its URL is printed; over SSH:\n"
+        "ssh -L 7007:127.0.0.1:7007 HOST); held-out views come from transforms_test.json beside the data\n"
+        "(else a few training views, marked so). When training ends the page says so and stays up until Ctrl-C.\n"
         "Example: nerfpt train ../shared/data/nerf_synthetic/lego -o lego.npt --downscale 2 --time 600");
     cmd->add_option("DATA", args.data,
                     "A transforms.json, or a folder holding transforms.json or transforms_{SPLIT}.json")
@@ -126,6 +129,7 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
     cmd->add_flag("--resume", args.resume, "Continue training the model in --output where it stopped");
     cmd->add_flag("--force", args.force, "Overwrite --output if it exists (without --resume)")
         ->excludes(cmd->get_option("--resume"));
+    add_live_serve_options(cmd, args.serve);
     return cmd;
 }
 
@@ -166,6 +170,13 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     refuse_overwriting_inputs(out, "--output", {{"DATA", args.data}, {"--config", args.config}});
     std::optional<tbb::global_control> threads;
     if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
+    // The page binds first: a port in use fails before the data loads.
+    std::unique_ptr<LiveTraining> live;
+    nerf::TrainingObserver* observer = args.observer;
+    if (args.serve.enabled && !observer) {
+        live = std::make_unique<LiveTraining>(args.serve, "nerfpt train " + args.data);
+        observer = &live->monitor();
+    }
 
     nerf::NerfModel model;
     if (args.resume) {
@@ -211,6 +222,20 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         auto no_interrupt = interrupts.hold();  // the file is complete, or an interrupt waits for it
         nerf::save_model(out, model, true);
     };
+    if (observer) {
+        nerf::TrainingStart ts;
+        ts.data = &data;
+        ts.data_path = args.data;
+        ts.split = args.split;
+        ts.downscale = args.downscale;
+        ts.world_to_model = model.world_to_model;
+        ts.backend = backend;
+        ts.device = trainer.device();
+        ts.start_step = trainer.steps_done();
+        ts.target_steps = target_steps;
+        ts.target_seconds = args.seconds;
+        observer->on_start(ts);
+    }
     interrupts.set_cooperative(true);
     StatusLine progress(tty, global.quiet);
     const uint64_t interval = uint64_t(model.config.training.checkpoint_interval);
@@ -236,6 +261,13 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
                                     ? std::min(1.0, elapsed / args.seconds)
                                     : std::min(1.0, double(trainer.steps_done()) / double(target_steps));
         show_train_progress(progress, stats, fraction, rays_ema, elapsed, false);
+        if (observer) {
+            observer->on_step(stats, elapsed, fraction);
+            if (observer->snapshot_due()) {
+                trainer.sync_model();
+                observer->on_snapshot(model, trainer.steps_done());
+            }
+        }
         if (!std::isfinite(stats.loss))
             throw Error("training diverged at step " + std::to_string(stats.step) +
                         " (loss is not finite); the last checkpoint in '" + out.string() + "' is kept");
@@ -270,6 +302,11 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     fmt::print("wrote {} after {} steps ({} of training), last batch psnr {:.2f} dB\n", out.string(),
                trainer.steps_done(), format_seconds(model.training->elapsed_seconds),
                nerf::psnr_from_mse(stats.mse));
+    if (observer) {
+        observer->on_snapshot(model, trainer.steps_done());  // the model as saved: its held-out PSNR
+        observer->on_finish(trainer.steps_done(), model.training->elapsed_seconds, interrupted);
+    }
+    if (live && !interrupted) live->serve_until_interrupted();
     if (interrupted) {
         const std::string hint = !args.resume_hint.empty()
                                      ? args.resume_hint

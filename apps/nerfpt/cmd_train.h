@@ -7,6 +7,8 @@
 #include <string>
 
 #include "common.h"
+#include "live_training.h"
+#include "nerf/training_observer.h"
 #include "relight_stage.h"
 
 namespace npt::cli {
@@ -29,6 +31,9 @@ struct TrainArgs {
     bool force = false;
     // The command that continues after an interrupt, printed then; empty: this train command with --resume.
     std::string resume_hint;
+    LiveServeArgs serve;  // --serve: the live-training page (live_training.h)
+    // Watches the training instead of a page of its own (nerfpt capture --serve passes its page's); not owned.
+    nerf::TrainingObserver* observer = nullptr;
 };
 
 CLI::App* add_train_command(CLI::App& app, TrainArgs& args);

@@ -165,7 +165,8 @@ fs::path json_path(const fs::path& folder_or_json, const std::string& split) {
 
 }  // namespace
 
-Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, const ProgressFn& progress) {
+Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, const ProgressFn& progress,
+                     size_t max_frames) {
     const fs::path path = json_path(folder_or_json, split);
     const std::string file = path.string();
     const json root = read_json(path);
@@ -199,11 +200,11 @@ Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, c
     if (frames_it == root.end()) throw Error(file + ": missing 'frames'");
     if (!frames_it->is_array()) throw Error(file + ": 'frames' must be an array");
     if (frames_it->empty()) throw Error(file + ": 'frames' is empty");
-    const size_t n = frames_it->size();
+    const size_t n_json = frames_it->size();
 
     const fs::path base_dir = path.parent_path();
-    std::vector<FrameSpec> specs(n);
-    for (size_t i = 0; i < n; ++i) {
+    std::vector<FrameSpec> specs(n_json);
+    for (size_t i = 0; i < n_json; ++i) {
         const json& fr = (*frames_it)[i];
         std::string where = file + ": frame " + std::to_string(i);
         if (!fr.is_object()) throw Error(where + ": expected an object");
@@ -237,6 +238,12 @@ Dataset load_dataset(const fs::path& folder_or_json, const std::string& split, c
             if (!std::isfinite(k)) throw Error(where + ": 'k1', 'k2', 'p1' and 'p2' must fit a float");
         s.image = resolve_image(base_dir, s.file_path, where);
     }
+    if (max_frames > 0 && specs.size() > max_frames) {
+        std::vector<FrameSpec> kept;
+        for (size_t k = 0; k < max_frames; ++k) kept.push_back(specs[k * specs.size() / max_frames]);
+        specs = std::move(kept);
+    }
+    const size_t n = specs.size();
 
     // The first image fixes the size, and with it the buffer, before the others are decoded in parallel.
     auto decode = [&](size_t i) {

@@ -64,8 +64,10 @@ constexpr double k_max_aabb_scale = 128;
 // or the file itself when given a file (split is then ignored). Image paths are relative to the json; a path
 // without an extension is tried with .png, .jpg and .jpeg. Images load in parallel. Throws npt::Error naming
 // the file, the frame and the field.
+// max_frames > 0 keeps at most that many frames, evenly spread over the json's (the live-training page's few
+// held-out views: it need not decode a whole test set).
 Dataset load_dataset(const std::filesystem::path& folder_or_json, const std::string& split,
-                     const ProgressFn& progress = {});
+                     const ProgressFn& progress = {}, size_t max_frames = 0);
 
 // Shrinks every image by an integer factor (box filter over premultiplied colour, so transparent pixels do not
 // bleed their colour into the edges) and scales the intrinsics to match. Sizes that are not multiples of the

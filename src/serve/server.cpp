@@ -10,6 +10,7 @@
 #include <deque>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <random>
 
 #include "core/error.h"
@@ -92,7 +93,7 @@ struct Server::Impl {
     ServerOptions options;
     asio::io_context ioc{1};
     tcp::acceptor acceptor{ioc};
-    Viewer* viewer = nullptr;
+    PageHandler* viewer = nullptr;
     uint16_t port = 0;
     uint64_t next_id = 1;
 
@@ -299,7 +300,7 @@ struct Server::Impl {
             }
             if (req.method() != http::verb::get && req.method() != http::verb::head)
                 return respond(http::status::method_not_allowed, "text/plain", "GET only\n", req.keep_alive());
-            if (path == "/") path = "/index.html";
+            if (path == "/") path = server.options.index;
             const Asset* a = find_asset(path);
             if (!a) return respond(http::status::not_found, "text/plain", "not found\n", req.keep_alive());
             std::string cookie;
@@ -343,7 +344,7 @@ Server::Server(const ServerOptions& options) : m(std::make_unique<Impl>()) {
 
 Server::~Server() { stop(); }
 
-void Server::attach(Viewer* viewer) { m->viewer = viewer; }
+void Server::attach(PageHandler* handler) { m->viewer = handler; }
 uint16_t Server::port() const { return m->port; }
 size_t Server::sessions() const { return m->session_count.load(); }
 

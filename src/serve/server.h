@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-#include "serve/viewer.h"
+#include "serve/page_io.h"
 
 namespace npt::serve {
 
@@ -16,6 +16,8 @@ struct ServerOptions {
     uint16_t port = 7007;  // 0: any free port (tests)
     // Required of every request when not empty: "?token=..." on the page's URL (then a cookie) and on the socket.
     std::string token;
+    // The page "/" serves: the scene viewer, or "/train.html" (the live-training page).
+    std::string index = "/index.html";
 };
 
 // A random 128-bit token in hex, from the system's random source.
@@ -32,8 +34,8 @@ class Server final : public ViewerSink {
     Server(const Server&) = delete;
     Server& operator=(const Server&) = delete;
 
-    // The viewer the sockets' messages go to; set before run().
-    void attach(Viewer* viewer);
+    // What the sockets' messages go to (a Viewer or a TrainingMonitor); set before run().
+    void attach(PageHandler* handler);
     uint16_t port() const;
     // The page's URL (with the token when there is one).
     std::string url() const;

@@ -19,6 +19,7 @@
 #include "render/backend/render_backend.h"
 #include "scene/scene.h"
 #include "serve/frame_encoder.h"
+#include "serve/page_io.h"
 #include "serve/protocol.h"
 #include "serve/scene_save.h"
 
@@ -34,30 +35,20 @@ struct ViewerOptions {
     std::filesystem::path output_dir;  // stills; empty: beside the scene
 };
 
-// Where the worker's output goes. Called from the worker thread; must not block.
-class ViewerSink {
-  public:
-    virtual ~ViewerSink() = default;
-    // A binary frame for every client: [u32 little-endian n][n bytes of JSON header][JPEG].
-    virtual void broadcast_frame(std::shared_ptr<const std::string> frame) = 0;
-    // A JSON text message for one client (`client` != 0) or every client (0).
-    virtual void send_text(uint64_t client, std::shared_ptr<const std::string> text) = 0;
-};
-
-class Viewer {
+class Viewer final : public PageHandler {
   public:
     // Loads the scene and prepares its renderers. Throws npt::Error for a scene nerfpt render would refuse.
     Viewer(const ViewerOptions& options, ViewerSink& sink);
-    ~Viewer();
+    ~Viewer() override;
     Viewer(const Viewer&) = delete;
     Viewer& operator=(const Viewer&) = delete;
 
     void start();
     void stop();
     // From any thread: queued for the worker. A queue over k_max_queue drops the oldest camera message.
-    void post(uint64_t client, ClientMessage message);
+    void post(uint64_t client, ClientMessage message) override;
     // The state a newly connected page starts from (JSON text: {"type": "state", ...}).
-    std::shared_ptr<const std::string> state() const;
+    std::shared_ptr<const std::string> state() const override;
     // Frames handed to the sink so far (tests).
     uint64_t frames_sent() const { return m_frames_sent; }
 

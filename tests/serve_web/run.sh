@@ -22,6 +22,13 @@ fi
 scene_dir="$work/scene"
 rm -rf "$scene_dir" && mkdir -p "$scene_dir"
 cp "$here/../data/serve/"* "$scene_dir/"
-cp "$here/viewer_test.mjs" "$work/"
+cp "$here/viewer_test.mjs" "$here/train_test.mjs" "$work/"
 cd "$work"
 NERFPT="$nerfpt" SCENE="$scene_dir/scene.json" SHOTS="$shots" CHROMIUM="$chromium" node viewer_test.mjs
+# nerf train --serve's page: needs NeRF-synthetic lego (../shared/data); without it, that part is skipped.
+lego=${NERFPT_LEGO:-$here/../../../shared/data/nerf_synthetic/lego}
+if [[ -f "$lego/transforms_train.json" ]]; then
+    NERFPT="$nerfpt" LEGO="$(realpath "$lego")" WORK="$work" SHOTS="$shots" CHROMIUM="$chromium" node train_test.mjs
+else
+    echo "serve.browser: no $lego: the training page's test is skipped"
+fi

@@ -1,0 +1,33 @@
+// What connects the server (server.h) to what a page shows: the viewer of a scene (viewer.h) or the live
+// training page (training_monitor.h). Plain C++, no Boost: the server includes Beast, these do not.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "serve/protocol.h"
+
+namespace npt::serve {
+
+// Where a worker's output goes. Called from the worker thread; must not block.
+class ViewerSink {
+  public:
+    virtual ~ViewerSink() = default;
+    // A binary frame for every client: [u32 little-endian n][n bytes of JSON header][JPEG].
+    virtual void broadcast_frame(std::shared_ptr<const std::string> frame) = 0;
+    // A JSON text message for one client (`client` != 0) or every client (0).
+    virtual void send_text(uint64_t client, std::shared_ptr<const std::string> text) = 0;
+};
+
+// Where the pages' messages go. Called from the server's thread; must not block.
+class PageHandler {
+  public:
+    virtual ~PageHandler() = default;
+    // The state a newly connected page starts from (JSON text: {"type": "state", ...}).
+    virtual std::shared_ptr<const std::string> state() const = 0;
+    // A parsed message from page `client`, queued for the worker.
+    virtual void post(uint64_t client, ClientMessage message) = 0;
+};
+
+}  // namespace npt::serve
