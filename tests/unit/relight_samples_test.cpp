@@ -38,6 +38,7 @@ TEST(RelightSamples, EventDrawsLieOnThePointsCameraRayNearTheSurface) {
     ASSERT_GT(s.size(), 128u);
     ASSERT_EQ(s.draws, 4);
     ASSERT_EQ(s.draw.size(), s.size() * 4);
+    EXPECT_EQ(s.lit, s.size());  // no borrowing pixels: every sample is lit by its own directions
     size_t spread = 0, near = 0;
     double max_off_ray = 0;
     for (size_t i = 0; i < s.size(); ++i) {

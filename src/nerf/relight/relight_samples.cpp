@@ -338,6 +338,7 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
         }
         if (progress) progress(end, n);
     }
+    out.lit = out.size();
     if (settings.borrowing_pixels > 0) add_borrowing_pixels(model, data, query, settings, min_alpha, out);
     return out;
 }
