@@ -173,6 +173,11 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
                     fmt::format("train: surface points of the relight stage (default: {} on a GPU, {} on the CPU)",
                                 k_relight_points_gpu, k_relight_points_cpu))
         ->check(CLI::Range(64, 1 << 22));
+    cmd->add_option("--relight-pixels", args.relight_pixels,
+                    fmt::format("train: pixels of the relight stage that borrow a surface point's light "
+                                "(default: {} on a GPU, {} on the CPU)",
+                                k_relight_pixels_gpu, k_relight_pixels_cpu))
+        ->check(CLI::Range(0, 1 << 24));
     cmd->add_option("--turntable-frames", args.turntable_frames, "Frames of the turntable video (0: none)")
         ->check(CLI::Range(0, 100000))
         ->capture_default_str();
@@ -357,6 +362,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
     if (args.relightable) {  // absent otherwise: older records stay valid
         train_target["relight_steps"] = args.relight_steps;
         train_target["relight_points"] = args.relight_points;
+        train_target["relight_pixels"] = args.relight_pixels;
     }
     std::error_code ec;
     bool trained = false;  // in this run: the object's box is refined again from the new model
@@ -385,6 +391,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         t.relightable = args.relightable;
         t.relight.steps = args.relight_steps;
         t.relight.points = args.relight_points;
+        t.relight.borrowing_pixels = args.relight_pixels;
         if (live) t.observer = &live->monitor();
         const int rc = run_train(t, global, interrupts);
         if (rc != 0) return rc;

@@ -30,6 +30,7 @@ struct CaptureArgs {
     bool relightable = false;  // train: the relight stage after the NeRF (nerfpt train --relightable)
     uint64_t relight_steps = RelightStageOptions{}.steps;
     int relight_points = 0;  // 0: the relight stage's default for the backend
+    int relight_pixels = -1;  // borrowing pixels; -1: the relight stage's default for the backend
     double height_m = 0;  // the object's real height in metres; 0: the object frame stays in capture units
     // split, train, eval
     int holdout_every = 8;  // 0: train on every frame, no held-out PSNR

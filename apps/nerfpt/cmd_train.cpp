@@ -42,7 +42,8 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
         "continues from it (exactly on the CPU). A model trained on either backend resumes on the other.\n"
         "With --serve, a page in the browser shows the training live (its URL is printed; over SSH:\n"
         "ssh -L 7007:127.0.0.1:7007 HOST); held-out views come from transforms_test.json beside the data\n"
-        "(else a few training views, marked so). When training ends the page says so and stays up until Ctrl-C.\n"
+        "(else a few training views, marked so). When training ends the page says so and stays up until "
+        "Ctrl-C.\n"
         "Example: nerfpt train ../shared/data/nerf_synthetic/lego -o lego.npt --downscale 2 --time 600");
     cmd->add_option("DATA", args.data,
                     "A transforms.json, or a folder holding transforms.json or transforms_{SPLIT}.json")
@@ -110,9 +111,11 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
         ->check(CLI::Range(0.0f, 0.5f));
     cmd->add_option(
            "--relight-pixels", args.relight.borrowing_pixels,
-           "Training pixels that supervise the albedo without light directions of their own: each "
-           "borrows the normal and light of the nearest surface point (one camera ray each instead of "
-           "--relight-directions light rays; default: 0)")
+           fmt::format("Training pixels that supervise the albedo without light directions of their own: "
+                       "each borrows the normal and light of the nearest surface point (one camera ray "
+                       "each instead of --relight-directions light rays; default: {} on a GPU, {} on the "
+                       "CPU)",
+                       k_relight_pixels_gpu, k_relight_pixels_cpu))
         ->check(CLI::Range(0, 1 << 24));
     cmd->add_option(
            "--relight-table", args.relight.table_log2,

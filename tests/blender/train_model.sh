@@ -2,7 +2,7 @@
 # Trains the tiny model the Blender add-on tests import: the NeRF tests' sphere data set (three shaded spheres,
 # 20 views of 32x32, tests/nerf_test_scene.h) with their small config, 400 steps on the CPU (seconds).
 # Then the same model made relightable (`--resume --relightable`: the relight stage added to the trained NeRF) for
-# test_relit.py, with a small relight stage (150 steps over 1024 surface points): the test needs a relightable
+# test_relit.py, with a small relight stage (150 steps over 1024 surface points and 4096 borrowing pixels): the test needs a relightable
 # model, not a good one.
 # And the plain model given an object frame, as `nerfpt capture` gives one (test_object.py): object space -> the
 # training world turned 30 deg about Z after 10 deg about X, scaled 2 (one metre of object is 2 units of the
@@ -21,7 +21,7 @@ awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "trained in %.1f s\n", b
 cp "$out/spheres.npt" "$out/spheres_relit.npt"
 start=$(date +%s.%N)
 "$nerfpt" train "$out/data" -o "$out/spheres_relit.npt" --backend cpu --steps 400 --resume --relightable \
-    --relight-steps 150 --relight-points 1024 -q
+    --relight-steps 150 --relight-points 1024 --relight-pixels 4096 -q
 awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "relight stage in %.1f s\n", b - a }'
 "$nerfpt" info "$out/spheres_relit.npt" | grep relight
 cat >"$out/object_frame.json" <<'JSON'

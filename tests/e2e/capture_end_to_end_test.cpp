@@ -75,7 +75,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     // few points and steps: this checks the wiring (the stage's quality is measured in docs/benchmarks.md).
     const uint64_t steps = nerf::load_model(work / "model.npt").training->adam.step;
     std::vector<std::string> relit = capture;
-    for (const char* a : {"--relightable", "--relight-steps", "20", "--relight-points", "512"}) relit.push_back(a);
+    for (const char* a : {"--relightable", "--relight-steps", "20", "--relight-points", "512", "--relight-pixels", "2048"}) relit.push_back(a);
     const int relit_rc = run_cli(relit, dir / "relight.log");
     ASSERT_EQ(relit_rc, 0) << read_text(dir / "relight.log");
     const nerf::NerfModel relightable = nerf::load_model(work / "model.npt");
