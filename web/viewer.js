@@ -186,7 +186,7 @@ overlay.addEventListener('dblclick', (e) => {
 // --- the panel ------------------------------------------------------------------------------------------------
 const gui = new GUI({ title: 'nerfpt serve' });
 ui.camera = '';
-ui.spp = 64; ui.max_depth = 16; ui.exposure = 0; ui.preview = 4; ui.showBoxes = true;
+ui.spp = 64; ui.max_depth = 16; ui.exposure = 0; ui.preview = 4; ui.showBoxes = true; ui.view = 'beauty';
 ui.volume = -1; ui.mode = 'translate';
 ui.density_scale = 1; ui.emission_scale = 1; ui.shading = 'auto';
 ui.crop = { on: false, min: [0, 0, 0], max: [1, 1, 1] };
@@ -194,6 +194,8 @@ ui.secondsPerKey = 1;
 const viewFolder = gui.addFolder('View');
 let cameraCtl = null;
 viewFolder.add(ui, 'flySpeed', 0.01, 20).name('fly speed (units/s)');
+// What the picture shows: the render, or a layer of its film (alpha, albedo, normal as 0.5 + n/2, depth as grey).
+viewFolder.add(ui, 'view', ['beauty', 'alpha', 'albedo', 'normal', 'depth']).name('show').onFinishChange((v) => send({ type: 'settings', view: v }));
 viewFolder.add(ui, 'exposure', -10, 10, 0.1).onFinishChange((v) => send({ type: 'settings', exposure: v }));
 viewFolder.add(ui, 'spp', 1, 4096, 1).name('target spp').onFinishChange((v) => send({ type: 'settings', spp: v }));
 viewFolder.add(ui, 'max_depth', 0, 64, 1).name('bounces').onFinishChange((v) => send({ type: 'settings', max_depth: v }));
@@ -253,7 +255,7 @@ function onState(st) {
   setSize(st.width, st.height);
   if (first) {
     applyServerCamera(st.camera);
-    ui.spp = st.target_spp; ui.max_depth = st.max_depth; ui.exposure = st.exposure; ui.preview = st.preview_divisor;
+    ui.spp = st.target_spp; ui.max_depth = st.max_depth; ui.exposure = st.exposure; ui.preview = st.preview_divisor; ui.view = st.view || 'beauty';
     const names = {}; st.cameras.forEach((c, i) => { names[c.name || `camera ${i}`] = i; });
     if (st.cameras.length) {
       ui.camera = 0;

@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "core/json_file.h"
+#include "serve/view_layer.h"
 
 namespace npt::serve {
 namespace {
@@ -27,7 +28,8 @@ int integer(const json& v, const std::string& field, int lo, int hi) {
     // As int64 first: a huge unsigned value must not wrap into range.
     if (v.is_number_unsigned() && v.get<uint64_t>() > uint64_t(hi)) fail(field, "out of range");
     const int64_t x = v.get<int64_t>();
-    if (x < lo || x > hi) fail(field, "expected a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    if (x < lo || x > hi)
+        fail(field, "expected a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
     return int(x);
 }
 
@@ -60,20 +62,23 @@ CameraMsg parse_camera(const json& j) {
     const double f = norm(m.forward), u = norm(m.up);
     if (!(f > 1e-9)) fail("camera.forward", "must not be zero");
     if (!(u > 1e-9)) fail("camera.up", "must not be zero");
-    const V3 c{m.forward[1] * m.up[2] - m.forward[2] * m.up[1], m.forward[2] * m.up[0] - m.forward[0] * m.up[2],
+    const V3 c{m.forward[1] * m.up[2] - m.forward[2] * m.up[1],
+               m.forward[2] * m.up[0] - m.forward[0] * m.up[2],
                m.forward[0] * m.up[1] - m.forward[1] * m.up[0]};
     if (!(norm(c) > 1e-6 * f * u)) fail("camera.up", "must not be parallel to camera.forward");
     return m;
 }
 
 VolumeMsg parse_volume(const json& j) {
-    check_keys(j, "volume", {"index", "translation", "rotation", "scale", "density_scale", "emission_scale", "crop",
-                             "shading"});
+    check_keys(
+        j, "volume",
+        {"index", "translation", "rotation", "scale", "density_scale", "emission_scale", "crop", "shading"});
     VolumeMsg m;
     if (!j.contains("index")) fail("volume.index", "missing");
     m.index = integer(j["index"], "volume.index", 0, 1 << 20);
     if (j.contains("translation"))
-        m.translation = numbers<3>(j["translation"], "volume.translation", -k_max_coordinate, k_max_coordinate);
+        m.translation =
+            numbers<3>(j["translation"], "volume.translation", -k_max_coordinate, k_max_coordinate);
     if (j.contains("rotation")) {
         V4 q = numbers<4>(j["rotation"], "volume.rotation", -2, 2);
         const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
@@ -115,13 +120,20 @@ VolumeMsg parse_volume(const json& j) {
 }
 
 SettingsMsg parse_settings(const json& j) {
-    check_keys(j, "settings", {"spp", "max_depth", "exposure", "preview_divisor"});
+    check_keys(j, "settings", {"spp", "max_depth", "exposure", "preview_divisor", "view"});
     SettingsMsg m;
     if (j.contains("spp")) m.spp = integer(j["spp"], "settings.spp", 1, k_max_target_spp);
-    if (j.contains("max_depth")) m.max_depth = integer(j["max_depth"], "settings.max_depth", 0, k_max_viewer_depth);
+    if (j.contains("max_depth"))
+        m.max_depth = integer(j["max_depth"], "settings.max_depth", 0, k_max_viewer_depth);
     if (j.contains("exposure")) m.exposure = number(j["exposure"], "settings.exposure", -20, 20);
     if (j.contains("preview_divisor"))
-        m.preview_divisor = integer(j["preview_divisor"], "settings.preview_divisor", 1, k_max_preview_divisor);
+        m.preview_divisor =
+            integer(j["preview_divisor"], "settings.preview_divisor", 1, k_max_preview_divisor);
+    if (j.contains("view")) {
+        if (!j["view"].is_string() || !parse_view_layer(j["view"].get<std::string>()))
+            fail("settings.view", "expected \"beauty\", \"alpha\", \"albedo\", \"normal\" or \"depth\"");
+        m.view = j["view"].get<std::string>();
+    }
     return m;
 }
 
@@ -144,7 +156,8 @@ ClientMessage parse_client_message(std::string_view text) {
     if (type == "volume") return parse_volume(j);
     if (type == "light") {
         check_keys(j, type, {"index", "intensity_scale"});
-        if (!j.contains("index") || !j.contains("intensity_scale")) fail("light", "needs index and intensity_scale");
+        if (!j.contains("index") || !j.contains("intensity_scale"))
+            fail("light", "needs index and intensity_scale");
         return LightMsg{integer(j["index"], "light.index", 0, 1 << 20),
                         number(j["intensity_scale"], "light.intensity_scale", 0, k_max_scale_factor)};
     }

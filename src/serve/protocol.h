@@ -1,6 +1,6 @@
-// The viewer's messages from the page (JSON text over the WebSocket), parsed and range-checked in one place so
-// that the server acts only on well-formed requests. Everything here is plain C++ (no Boost): the fuzz harness
-// (fuzz/fuzz_serve_message.cpp) and the unit tests link it alone.
+// The viewer's messages from the page (JSON text over the WebSocket), parsed and range-checked in one place
+// so that the server acts only on well-formed requests. Everything here is plain C++ (no Boost): the fuzz
+// harness (fuzz/fuzz_serve_message.cpp) and the unit tests link it alone.
 #pragma once
 
 #include <array>
@@ -25,8 +25,8 @@ constexpr double k_max_scale_factor = 1e6;  // density, emission and light scale
 using V3 = std::array<double, 3>;
 using V4 = std::array<double, 4>;
 
-// The viewer's camera: position and orientation (three.js's camera looks down its -Z, up +Y), vertical field of
-// view in degrees.
+// The viewer's camera: position and orientation (three.js's camera looks down its -Z, up +Y), vertical field
+// of view in degrees.
 struct CameraMsg {
     V3 position{};
     V3 forward{0, 0, -1};
@@ -37,8 +37,8 @@ struct CameraMsg {
 struct UseCameraMsg {
     int index = 0;
 };
-// Edits of volume `index`: any subset of its placement (world translation, rotation quaternion x y z w, scale of
-// the node) and what fills it. `crop_clear` removes the crop box (the model's whole box).
+// Edits of volume `index`: any subset of its placement (world translation, rotation quaternion x y z w, scale
+// of the node) and what fills it. `crop_clear` removes the crop box (the model's whole box).
 struct VolumeMsg {
     int index = 0;
     std::optional<V3> translation;
@@ -61,6 +61,8 @@ struct SettingsMsg {
     std::optional<int> max_depth;        // bounces
     std::optional<double> exposure;      // stops, the page's tone map only
     std::optional<int> preview_divisor;  // resolution divisor while the camera moves
+    std::optional<std::string>
+        view;  // what the page shows: beauty, alpha, albedo, normal, depth (view_layer.h)
 };
 struct SaveMsg {};
 // A still at the scene's full resolution and `spp` (0: the settings') written beside the scene.
@@ -74,8 +76,8 @@ struct KeyframesSaveMsg {
     double seconds_per_key = 1.0;
 };
 
-using ClientMessage = std::variant<CameraMsg, UseCameraMsg, VolumeMsg, LightMsg, SettingsMsg, SaveMsg, RenderStillMsg,
-                                   KeyframeAddMsg, KeyframesClearMsg, KeyframesSaveMsg>;
+using ClientMessage = std::variant<CameraMsg, UseCameraMsg, VolumeMsg, LightMsg, SettingsMsg, SaveMsg,
+                                   RenderStillMsg, KeyframeAddMsg, KeyframesClearMsg, KeyframesSaveMsg>;
 
 // Parses one message. Throws npt::Error with a one-line reason ("camera.position: expected 3 finite numbers")
 // for anything malformed, oversized or out of range; never anything else.

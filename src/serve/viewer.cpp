@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -37,7 +38,9 @@ scene::Camera camera_from_view(const render::CameraView& v) {
 }  // namespace
 
 Viewer::Viewer(const ViewerOptions& options, ViewerSink& sink)
-    : m_options(options), m_sink(sink), m_scene(std::make_unique<scene::Scene>(scene::load_scene(options.scene))),
+    : m_options(options),
+      m_sink(sink),
+      m_scene(std::make_unique<scene::Scene>(scene::load_scene(options.scene))),
       m_saver(options.scene) {
     scene::Scene& s = *m_scene;
     render::RenderOptions o;
@@ -191,8 +194,9 @@ bool Viewer::handle(const Pending& p) {
                 return true;
             } else if constexpr (std::is_same_v<T, UseCameraMsg>) {
                 if (size_t(m.index) >= m_file_cameras)
-                    throw Error("use_camera.index: " + std::to_string(m.index) + " is not a scene camera (the scene has " +
-                                std::to_string(m_file_cameras) + ")");
+                    throw Error("use_camera.index: " + std::to_string(m.index) +
+                                " is not a scene camera (the scene has " + std::to_string(m_file_cameras) +
+                                ")");
                 scene::Camera c = s.cameras[size_t(m.index)];
                 c.name = "viewer";
                 s.cameras.back() = c;
@@ -201,8 +205,9 @@ bool Viewer::handle(const Pending& p) {
                 return true;
             } else if constexpr (std::is_same_v<T, VolumeMsg>) {
                 if (size_t(m.index) >= s.volumes.size())
-                    throw Error("volume.index: " + std::to_string(m.index) + " is out of range (the scene has " +
-                                std::to_string(s.volumes.size()) + " volumes)");
+                    throw Error("volume.index: " + std::to_string(m.index) +
+                                " is out of range (the scene has " + std::to_string(s.volumes.size()) +
+                                " volumes)");
                 scene::VolumeInstance& v = s.volumes[size_t(m.index)];
                 bool placed = false;
                 if (m.translation || m.rotation || m.scale) {
@@ -233,10 +238,12 @@ bool Viewer::handle(const Pending& p) {
                 return placed || filled;
             } else if constexpr (std::is_same_v<T, LightMsg>) {
                 if (size_t(m.index) >= s.lights.size())
-                    throw Error("light.index: " + std::to_string(m.index) + " is out of range (the scene has " +
-                                std::to_string(s.lights.size()) + " punctual lights)");
+                    throw Error("light.index: " + std::to_string(m.index) +
+                                " is out of range (the scene has " + std::to_string(s.lights.size()) +
+                                " punctual lights)");
                 m_light_scale[size_t(m.index)] = m.intensity_scale;
-                s.lights[size_t(m.index)].intensity = m_light_base[size_t(m.index)] * float(m.intensity_scale);
+                s.lights[size_t(m.index)].intensity =
+                    m_light_base[size_t(m.index)] * float(m.intensity_scale);
                 apply_pose_change(false, true, false);
                 publish_state();
                 return true;
@@ -255,8 +262,14 @@ bool Viewer::handle(const Pending& p) {
                     m_divisor = *m.preview_divisor;
                     m_preview.reset();
                     if (m_divisor > 1)
-                        m_preview = render::prepare_renderer(
-                            s, options_for(std::max(1, m_width / m_divisor), std::max(1, m_height / m_divisor), 1));
+                        m_preview =
+                            render::prepare_renderer(s, options_for(std::max(1, m_width / m_divisor),
+                                                                    std::max(1, m_height / m_divisor), 1));
+                }
+                if (m.view) {
+                    const ViewLayer v = *parse_view_layer(*m.view);  // checked by the parser
+                    restart |= v != m_view;
+                    m_view = v;
                 }
                 if (m.exposure) {
                     m_exposure = *m.exposure;
@@ -272,7 +285,8 @@ bool Viewer::handle(const Pending& p) {
                 return false;
             } else if constexpr (std::is_same_v<T, KeyframeAddMsg>) {
                 if (m_keyframes.size() >= size_t(k_max_keyframes))
-                    throw Error("keyframe_add: the path has " + std::to_string(k_max_keyframes) + " keyframes already");
+                    throw Error("keyframe_add: the path has " + std::to_string(k_max_keyframes) +
+                                " keyframes already");
                 m_keyframes.push_back(s.cameras.back());
                 publish_state();
                 return false;
@@ -290,6 +304,7 @@ bool Viewer::handle(const Pending& p) {
 
 void Viewer::render_preview() {
     m_film.reset(m_width, m_height);
+    m_depth_range = 0.0f;  // the depth view's scale is taken again from the next pass
     if (!m_preview) {
         render_pass();
         return;
@@ -297,11 +312,13 @@ void Viewer::render_preview() {
     const render::RenderOptions o =
         options_for(std::max(1, m_width / m_divisor), std::max(1, m_height / m_divisor), 1);
     const auto t0 = Clock::now();
-    const Image& image = m_preview->render_frame(o);
-    const double seconds = seconds_since(t0);
     Accumulator preview;
     preview.reset(o.width, o.height);
-    preview.add(image);
+    if (m_view == ViewLayer::beauty)
+        preview.add(m_preview->render_frame(o));
+    else
+        preview.add(render_view(*m_preview, o, false));
+    const double seconds = seconds_since(t0);
     send_frame(preview, true, seconds, double(o.width) * o.height);
 }
 
@@ -309,23 +326,41 @@ void Viewer::render_pass() {
     render::RenderOptions o = options_for(m_width, m_height, 1);
     o.seed = m_seed + uint64_t(m_film.passes());
     const auto t0 = Clock::now();
-    if (m_options.backend == "cpu") {
-        // Cancellable: a message arriving mid-pass stops it at the next tile.
-        const Image image = m_full->render(o, [this](uint64_t, uint64_t) {
-            if (m_interrupt.load(std::memory_order_relaxed)) throw Cancelled{};
-        });
-        m_film.add(image);
-    } else {
+    if (m_view != ViewLayer::beauty)
+        m_film.add(render_view(*m_full, o, m_options.backend == "cpu"));
+    else if (m_options.backend == "cpu")
+        m_film.add(render_view(*m_full, o, true));
+    else
         m_film.add(m_full->render_frame(o));
-    }
     const double seconds = seconds_since(t0);
     // At most ~30 frames a second: a GPU pass takes milliseconds and the page cannot show more.
     if (m_film.passes() == 1 || m_film.passes() >= m_target_spp || seconds_since(m_last_send) >= 1.0 / 30)
         send_frame(m_film, false, seconds, double(m_width) * m_height);
 }
 
+Image Viewer::render_view(render::SceneRenderer& renderer, const render::RenderOptions& options,
+                          bool cancellable) {
+    render::ProgressFn progress;
+    if (cancellable)  // a message arriving mid-pass stops it at the next tile
+        progress = [this](uint64_t, uint64_t) {
+            if (m_interrupt.load(std::memory_order_relaxed)) throw Cancelled{};
+        };
+    if (m_view == ViewLayer::beauty) return renderer.render(options, progress);
+    render::AovImages aovs;
+    const Image rendered = renderer.render(view_options(options, m_view), progress, nullptr, &aovs);
+    if (m_view == ViewLayer::depth && !(m_depth_range > 0.0f)) {
+        // Black a tenth beyond the farthest thing the first pass of this view saw; kept while it accumulates.
+        float far = 0.0f;
+        for (float d : aovs.depth.pixels)
+            if (std::isfinite(d)) far = std::max(far, d);
+        m_depth_range = far > 0.0f ? 1.1f * far : 1.0f;
+    }
+    return view_image(m_view, rendered, aovs, m_depth_range);
+}
+
 void Viewer::send_frame(const Accumulator& film, bool preview, double pass_seconds, double samples) {
-    film.tonemap(m_exposure, m_rgb);
+    // The views other than the beauty are pictures of data: no exposure.
+    film.tonemap(m_view == ViewLayer::beauty ? m_exposure : 0.0, m_rgb);
     const std::string jpeg = m_jpeg.encode(m_rgb, film.width(), film.height());
     json header = {{"type", "frame"},
                    {"seq", ++m_seq},
@@ -367,6 +402,7 @@ void Viewer::publish_state() {
     st["target_spp"] = m_target_spp;
     st["max_depth"] = m_max_depth;
     st["exposure"] = m_exposure;
+    st["view"] = view_layer_name(m_view);
     st["savable"] = m_saver.can_save();
     st["why_not_savable"] = m_saver.why_not();
     st["keyframes"] = m_keyframes.size();
@@ -395,7 +431,8 @@ void Viewer::save(uint64_t client) {
     if (m_depth_edited) e.max_depth = m_max_depth;
     if (!m_saver.can_save()) throw Error("save: " + m_saver.why_not());
     const std::vector<std::string> notes = m_saver.save(*m_scene, e);
-    spdlog::info("serve: saved {}{}", m_options.scene.string(), notes.empty() ? "" : " (" + std::to_string(notes.size()) + " notes)");
+    spdlog::info("serve: saved {}{}", m_options.scene.string(),
+                 notes.empty() ? "" : " (" + std::to_string(notes.size()) + " notes)");
     for (const std::string& n : notes) spdlog::warn("serve: save: {}", n);
     reply(0, "saved", {{"path", m_options.scene.string()}, {"notes", notes}});
 }
@@ -424,8 +461,13 @@ void Viewer::render_still(uint64_t client, int spp) {
         write_png_premultiplied(png, image, float(m_exposure));
     else
         write_png(png, image, float(m_exposure));
-    reply(client, "render_done", {{"exr", exr.string()}, {"png", png.string()}, {"seconds", seconds_since(t0)},
-                                  {"width", m_width}, {"height", m_height}, {"spp", n}});
+    reply(client, "render_done",
+          {{"exr", exr.string()},
+           {"png", png.string()},
+           {"seconds", seconds_since(t0)},
+           {"width", m_width},
+           {"height", m_height},
+           {"spp", n}});
 }
 
 void Viewer::save_keyframes(uint64_t client, double seconds_per_key) {
@@ -433,8 +475,8 @@ void Viewer::save_keyframes(uint64_t client, double seconds_per_key) {
     const std::string stem = m_options.scene.stem().string();
     const fs::path path_file = dir / (stem + ".camera_path.gltf");
     const fs::path shot_file = dir / (stem + ".shot.json");
-    const int frames = SceneSaver::write_camera_path(path_file, m_keyframes, seconds_per_key, m_scene->settings.fps,
-                                                     m_width, m_height);
+    const int frames = SceneSaver::write_camera_path(path_file, m_keyframes, seconds_per_key,
+                                                     m_scene->settings.fps, m_width, m_height);
     // A JSON scene that renders the path: the camera path first (a JSON scene plays the first included
     // animation), then the scene as saved (a JSON scene with the viewer's edits applied, or the file itself).
     json shot;
@@ -456,9 +498,13 @@ void Viewer::save_keyframes(uint64_t client, double seconds_per_key) {
     write_text_atomic(shot_file, shot.dump(2) + "\n");
     const std::string command =
         fmt::format("nerfpt render {} -o out/{}.####.exr --frames 0-{}", shot_file.string(), stem, frames);
-    spdlog::info("serve: camera path of {} keyframes written to {} ({})", m_keyframes.size(), shot_file.string(), command);
+    spdlog::info("serve: camera path of {} keyframes written to {} ({})", m_keyframes.size(),
+                 shot_file.string(), command);
     reply(client, "keyframes_saved",
-          {{"shot", shot_file.string()}, {"path", path_file.string()}, {"frames", frames}, {"command", command},
+          {{"shot", shot_file.string()},
+           {"path", path_file.string()},
+           {"frames", frames},
+           {"command", command},
            {"notes", notes}});
 }
 

@@ -1,7 +1,8 @@
 // The viewer's render worker: owns the loaded scene and its prepared renderers (the same SceneRenderer that
-// `nerfpt render` uses, CPU or OptiX), applies the page's messages on its own thread, and renders progressively:
-// after any change one pass at a reduced resolution (the preview), then 1-sample passes at full resolution
-// accumulated until the target spp. Each frame is tone-mapped, JPEG-encoded and handed to the sink (the server).
+// `nerfpt render` uses, CPU or OptiX), applies the page's messages on its own thread, and renders
+// progressively: after any change one pass at a reduced resolution (the preview), then 1-sample passes at
+// full resolution accumulated until the target spp. Each frame is tone-mapped, JPEG-encoded and handed to the
+// sink (the server).
 #pragma once
 
 #include <atomic>
@@ -22,16 +23,17 @@
 #include "serve/page_io.h"
 #include "serve/protocol.h"
 #include "serve/scene_save.h"
+#include "serve/view_layer.h"
 
 namespace npt::serve {
 
 struct ViewerOptions {
     std::filesystem::path scene;
-    std::string backend = "cpu";  // resolved: "cpu" or "optix"
-    int width = 0, height = 0;    // 0: the scene's
-    int threads = 0;              // CPU render threads, 0 = all
-    int preview_divisor = 0;      // 0: 4 on the CPU, 1 (no preview) on OptiX
-    int target_spp = 0;           // 0: the scene's spp
+    std::string backend = "cpu";       // resolved: "cpu" or "optix"
+    int width = 0, height = 0;         // 0: the scene's
+    int threads = 0;                   // CPU render threads, 0 = all
+    int preview_divisor = 0;           // 0: 4 on the CPU, 1 (no preview) on OptiX
+    int target_spp = 0;                // 0: the scene's spp
     std::filesystem::path output_dir;  // stills; empty: beside the scene
 };
 
@@ -63,7 +65,7 @@ class Viewer final : public PageHandler {
     struct Cancelled {};
 
     void run();
-    void prepare();  // (re)builds the renderers for the scene as it is now
+    void prepare();                 // (re)builds the renderers for the scene as it is now
     bool handle(const Pending& p);  // true when the image changes
     void apply_pose_change(bool camera, bool lights, bool volumes);
     void render_preview();
@@ -72,6 +74,9 @@ class Viewer final : public PageHandler {
     void save(uint64_t client);
     void save_keyframes(uint64_t client, double seconds_per_key);
     void send_frame(const Accumulator& film, bool preview, double pass_seconds, double samples);
+    // One pass of `renderer` as the page shows it (the beauty, or the view's layer made viewable).
+    Image render_view(render::SceneRenderer& renderer, const render::RenderOptions& options,
+                      bool cancellable);
     void publish_state();
     void reply(uint64_t client, const std::string& type, nlohmann::json body);
     render::RenderOptions options_for(int width, int height, int spp) const;
@@ -87,6 +92,9 @@ class Viewer final : public PageHandler {
     int m_target_spp = 1;
     int m_max_depth = 16;
     double m_exposure = 0;
+    ViewLayer m_view = ViewLayer::beauty;
+    float m_depth_range =
+        0.0f;  // the depth view's black (0: not yet taken from a pass since the last change)
     bool m_spp_edited = false, m_depth_edited = false;
     std::vector<bool> m_volume_edited;
     std::vector<Rgb> m_light_base;
@@ -99,7 +107,7 @@ class Viewer final : public PageHandler {
     Accumulator m_film;
     std::vector<uint8_t> m_rgb;
     JpegEncoder m_jpeg;
-    bool m_dirty = true;  // the next frame is a preview after a change
+    bool m_dirty = true;                                      // the next frame is a preview after a change
     std::chrono::steady_clock::time_point m_change_received;  // when the oldest unserved change arrived
     bool m_change_pending_latency = false;
     std::chrono::steady_clock::time_point m_last_send;

@@ -36,6 +36,25 @@ try {
   check(cube.every((v) => v >= 240), `cube pixel ${cube} at (${cubeX}, 60) is white`);
   await page.screenshot({ path: `${SHOTS}/serve_viewer.png` });
 
+  // The panel's "show" list: the normal view paints the wall (facing +z) (0.5, 0.5, 1) -> (128, 128, 255); back
+  // to the render after.
+  const show = async (view) => {
+    const framesBefore = await page.evaluate(() => window.nerfpt.frames);
+    await page.evaluate((v) => {
+      const ctl = [...document.querySelectorAll('.lil-controller')].find((c) => c.querySelector('.lil-name')?.textContent === 'show');
+      const sel = ctl.querySelector('select');
+      sel.selectedIndex = [...sel.options].findIndex((o) => o.textContent === v);
+      sel.dispatchEvent(new Event('change'));
+    }, view);
+    await page.waitForFunction((v, n) => window.nerfpt.state.view === v && window.nerfpt.frames > n + 1 &&
+      window.nerfpt.header.spp >= 4 && !window.nerfpt.header.preview, { timeout: 30000 }, view, framesBefore);
+  };
+  await show('normal');
+  const normal = await page.evaluate(() => window.nerfpt.pixel(130, 100));
+  check(near(normal, [128, 128, 255], 6), `normal view: the wall pixel ${normal} is (128,128,255)`);
+  await page.screenshot({ path: `${SHOTS}/serve_normals.png` });
+  await show('beauty');
+
   // A drag on the view orbits the camera: a frame from another camera arrives.
   const before = await page.evaluate(() => window.nerfpt.header.camera.position);
   const box = await (await page.$('#overlay')).boundingBox();

@@ -36,6 +36,7 @@ TEST(ServeProtocol, ParsesVolumeEditsAndNormalisesTheRotation) {
 TEST(ServeProtocol, ParsesTheOtherTypes) {
     EXPECT_TRUE(std::holds_alternative<SaveMsg>(parse_client_message(R"({"type": "save"})")));
     EXPECT_EQ(std::get<SettingsMsg>(parse_client_message(R"({"type": "settings", "spp": 8, "exposure": -1.5})")).spp, 8);
+    EXPECT_EQ(*std::get<SettingsMsg>(parse_client_message(R"({"type": "settings", "view": "normal"})")).view, "normal");
     EXPECT_EQ(std::get<RenderStillMsg>(parse_client_message(R"({"type": "render", "spp": 3})")).spp, 3);
     EXPECT_EQ(std::get<LightMsg>(parse_client_message(R"({"type": "light", "index": 2, "intensity_scale": 0.5})")).index, 2);
     EXPECT_EQ(std::get<UseCameraMsg>(parse_client_message(R"({"type": "use_camera", "index": 1})")).index, 1);
@@ -78,6 +79,8 @@ TEST(ServeProtocol, RefusesBadMessagesWithOneLineNamingTheField) {
     bad(R"({"type": "settings", "max_depth": 1000})", {"settings.max_depth"});
     bad(R"({"type": "settings", "exposure": 99})", {"settings.exposure"});
     bad(R"({"type": "settings", "preview_divisor": 0})", {"settings.preview_divisor"});
+    bad(R"({"type": "settings", "view": "x-ray"})", {"settings.view"});
+    bad(R"({"type": "settings", "view": 3})", {"settings.view"});
     bad(R"({"type": "light", "index": 0})", {"light"});
     bad(R"({"type": "save", "path": "/etc/passwd"})", {"save.path", "unknown field"});
     bad(R"({"type": "keyframes_save", "seconds_per_key": 0})", {"keyframes_save.seconds_per_key"});

@@ -4,6 +4,7 @@
 // render` with the object where it was placed.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
@@ -13,6 +14,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <thread>
+#include <turbojpeg.h>
 
 #include "core/image_io.h"
 #include "serve/server.h"
@@ -72,6 +74,7 @@ struct Client {
         ws.text(true);
         ws.write(asio::buffer(text));
     }
+    std::string last_jpeg;  // of the last frame next() returned
     // The next message: JSON text, or a frame's header (type "frame") with its JPEG size in "jpeg_bytes".
     json next() {
         beast::flat_buffer b;
@@ -83,6 +86,7 @@ struct Client {
                            uint32_t(uint8_t(data[2])) << 16 | uint32_t(uint8_t(data[3])) << 24;
         json h = json::parse(data.substr(4, n));
         h["jpeg_bytes"] = data.size() - 4 - n;
+        last_jpeg = data.substr(4 + n);
         EXPECT_EQ(uint8_t(data[4 + n]), 0xFF);  // JPEG SOI marker
         EXPECT_EQ(uint8_t(data[5 + n]), 0xD8);
         return h;
@@ -138,6 +142,59 @@ TEST(ServeServer, PageGetsStateAndFramesAndACameraMoveGivesANewFrame) {
     EXPECT_EQ(moved["width"], 80);
     EXPECT_TRUE(moved.contains("latency_ms"));
     EXPECT_GT(moved["samples_per_s"].get<double>(), 0.0);
+}
+
+// The last frame's pixel (x, y) as 8-bit RGB.
+std::array<int, 3> jpeg_pixel(const std::string& jpeg, int x, int y) {
+    tjhandle tj = tjInitDecompress();
+    int w = 0, h = 0, sub = 0, space = 0;
+    std::vector<unsigned char> rgb;
+    const auto* src = reinterpret_cast<const unsigned char*>(jpeg.data());
+    if (tjDecompressHeader3(tj, src, jpeg.size(), &w, &h, &sub, &space) == 0) {
+        rgb.resize(size_t(w) * h * 3);
+        tjDecompress2(tj, src, jpeg.size(), rgb.data(), w, 0, h, TJPF_RGB, 0);
+    }
+    tjDestroy(tj);
+    if (x >= w || y >= h) {
+        ADD_FAILURE() << "pixel " << x << "," << y << " outside the " << w << "x" << h << " frame";
+        return {-1, -1, -1};
+    }
+    const unsigned char* p = &rgb[(size_t(y) * w + x) * 3];
+    return {p[0], p[1], p[2]};
+}
+
+// The test scene's wall (z = -2, facing the camera at z = 5; the cube is left of centre) in each view, at the
+// pixel right of centre, settled at the scene's 4 spp: beauty its emission, alpha 1, normal +z -> (0.5, 0.5, 1),
+// depth 7 of a range 1.1 x the farthest depth -> a mid grey. JPEG and the 8-bit steps allow a few code values.
+TEST(ServeServer, ViewsShowTheFilmsLayers) {
+    Running r(copy_serve_scene());
+    Client c(r.server->port());
+    const auto settled = [&](const std::string& view) {
+        c.until("state", [&](const json& s) { return s["view"] == view; });
+        c.until("frame", [](const json& f) { return f["spp"] == 4 && !f["preview"].get<bool>(); });
+        return jpeg_pixel(c.last_jpeg, 120, 60);
+    };
+    const auto near = [](std::array<int, 3> got, std::array<int, 3> want) {
+        for (int i = 0; i < 3; ++i)
+            if (std::abs(got[size_t(i)] - want[size_t(i)]) > 6) return false;
+        return true;
+    };
+    std::array<int, 3> px = settled("beauty");
+    EXPECT_TRUE(near(px, {188, 137, 99})) << px[0] << " " << px[1] << " " << px[2];  // sRGB of (0.5, 0.25, 0.125)
+    c.send(R"({"type": "settings", "view": "alpha"})");
+    px = settled("alpha");
+    EXPECT_TRUE(near(px, {255, 255, 255})) << px[0] << " " << px[1] << " " << px[2];
+    c.send(R"({"type": "settings", "view": "normal"})");
+    px = settled("normal");
+    EXPECT_TRUE(near(px, {128, 128, 255})) << px[0] << " " << px[1] << " " << px[2];
+    c.send(R"({"type": "settings", "view": "depth"})");
+    px = settled("depth");
+    EXPECT_EQ(px[0], px[1]);
+    EXPECT_GT(px[0], 5);
+    EXPECT_LT(px[0], 128);
+    c.send(R"({"type": "settings", "view": "albedo"})");
+    px = settled("albedo");
+    EXPECT_TRUE(near(px, {0, 0, 0})) << px[0] << " " << px[1] << " " << px[2];  // the wall's Kd is 0
 }
 
 TEST(ServeServer, BadMessagesGetErrorsAndTheServerGoesOn) {
