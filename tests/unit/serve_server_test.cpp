@@ -3,22 +3,22 @@
 // server goes on, a closed page freeing its session, the token, and an edit saved then rendered by `nerfpt
 // render` with the object where it was placed.
 #include <gtest/gtest.h>
+#include <turbojpeg.h>
 
 #include <array>
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
-#include <boost/beast/websocket.hpp>
 #include <chrono>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <thread>
-#include <turbojpeg.h>
 
 #include "core/image_io.h"
 #include "serve/server.h"
 #include "serve/viewer.h"
+#include "serve_test_client.h"
 #include "test_support.h"
 
 namespace npt::serve {
@@ -27,13 +27,13 @@ namespace fs = std::filesystem;
 namespace asio = boost::asio;
 namespace beast = boost::beast;
 namespace http = beast::http;
-namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
 using json = nlohmann::json;
 
 fs::path copy_serve_scene() {
     const fs::path dir = test::temp_dir();
-    for (const auto& e : fs::directory_iterator(test::test_data() / "serve")) fs::copy_file(e.path(), dir / e.path().filename());
+    for (const auto& e : fs::directory_iterator(test::test_data() / "serve"))
+        fs::copy_file(e.path(), dir / e.path().filename());
     return dir / "scene.json";
 }
 
@@ -62,49 +62,7 @@ struct Running {
     }
 };
 
-struct Client {
-    asio::io_context ioc;
-    websocket::stream<tcp::socket> ws{ioc};
-    explicit Client(uint16_t port, const std::string& query = {}) {
-        tcp::resolver resolver(ioc);
-        asio::connect(ws.next_layer(), resolver.resolve("127.0.0.1", std::to_string(port)));
-        ws.handshake("127.0.0.1:" + std::to_string(port), "/ws" + query);
-    }
-    void send(const std::string& text) {
-        ws.text(true);
-        ws.write(asio::buffer(text));
-    }
-    std::string last_jpeg;  // of the last frame next() returned
-    // The next message: JSON text, or a frame's header (type "frame") with its JPEG size in "jpeg_bytes".
-    json next() {
-        beast::flat_buffer b;
-        ws.read(b);
-        const std::string data = beast::buffers_to_string(b.data());
-        if (ws.got_text()) return json::parse(data);
-        EXPECT_GE(data.size(), 4u);
-        const uint32_t n = uint32_t(uint8_t(data[0])) | uint32_t(uint8_t(data[1])) << 8 |
-                           uint32_t(uint8_t(data[2])) << 16 | uint32_t(uint8_t(data[3])) << 24;
-        json h = json::parse(data.substr(4, n));
-        h["jpeg_bytes"] = data.size() - 4 - n;
-        last_jpeg = data.substr(4 + n);
-        EXPECT_EQ(uint8_t(data[4 + n]), 0xFF);  // JPEG SOI marker
-        EXPECT_EQ(uint8_t(data[5 + n]), 0xD8);
-        return h;
-    }
-    // Messages until one of `type` that satisfies `ok` (at most `limit` messages).
-    template <typename Fn>
-    json until(const std::string& type, Fn ok, int limit = 2000) {
-        for (int i = 0; i < limit; ++i) {
-            json m = next();
-            if (m["type"] == type && ok(m)) return m;
-        }
-        ADD_FAILURE() << "no '" << type << "' message";
-        return {};
-    }
-    json until(const std::string& type) {
-        return until(type, [](const json&) { return true; });
-    }
-};
+using Client = test::ServeClient;
 
 int http_get(uint16_t port, const std::string& target, const std::string& host = {}) {
     asio::io_context ioc;
@@ -133,11 +91,15 @@ TEST(ServeServer, PageGetsStateAndFramesAndACameraMoveGivesANewFrame) {
     const json first = c.until("frame");
     EXPECT_GT(first["jpeg_bytes"].get<size_t>(), 100u);
     // Accumulates to the scene's 4 spp at full resolution.
-    const json done = c.until("frame", [](const json& f) { return f["spp"] == 4 && !f["preview"].get<bool>(); });
+    const json done =
+        c.until("frame", [](const json& f) { return f["spp"] == 4 && !f["preview"].get<bool>(); });
     EXPECT_EQ(done["width"], 160);
 
-    c.send(R"({"type": "camera", "position": [0.5, 0, 5], "forward": [0, 0, -1], "up": [0, 1, 0], "fov_deg": 40})");
-    const json moved = c.until("frame", [](const json& f) { return std::abs(f["camera"]["position"][0].get<double>() - 0.5) < 1e-6; });
+    c.send(
+        R"({"type": "camera", "position": [0.5, 0, 5], "forward": [0, 0, -1], "up": [0, 1, 0], "fov_deg": 40})");
+    const json moved = c.until("frame", [](const json& f) {
+        return std::abs(f["camera"]["position"][0].get<double>() - 0.5) < 1e-6;
+    });
     EXPECT_TRUE(moved["preview"].get<bool>());  // the first frame after a move is the reduced one
     EXPECT_EQ(moved["width"], 80);
     EXPECT_TRUE(moved.contains("latency_ms"));
@@ -164,8 +126,9 @@ std::array<int, 3> jpeg_pixel(const std::string& jpeg, int x, int y) {
 }
 
 // The test scene's wall (z = -2, facing the camera at z = 5; the cube is left of centre) in each view, at the
-// pixel right of centre, settled at the scene's 4 spp: beauty its emission, alpha 1, normal +z -> (0.5, 0.5, 1),
-// depth 7 of a range 1.1 x the farthest depth -> a mid grey. JPEG and the 8-bit steps allow a few code values.
+// pixel right of centre, settled at the scene's 4 spp: beauty its emission, alpha 1, normal +z -> (0.5, 0.5,
+// 1), depth a dark grey (computed below). JPEG and the 8-bit steps allow a few code
+// values.
 TEST(ServeServer, ViewsShowTheFilmsLayers) {
     Running r(copy_serve_scene());
     Client c(r.server->port());
@@ -180,7 +143,8 @@ TEST(ServeServer, ViewsShowTheFilmsLayers) {
         return true;
     };
     std::array<int, 3> px = settled("beauty");
-    EXPECT_TRUE(near(px, {188, 137, 99})) << px[0] << " " << px[1] << " " << px[2];  // sRGB of (0.5, 0.25, 0.125)
+    EXPECT_TRUE(near(px, {188, 137, 99}))
+        << px[0] << " " << px[1] << " " << px[2];  // sRGB of (0.5, 0.25, 0.125)
     c.send(R"({"type": "settings", "view": "alpha"})");
     px = settled("alpha");
     EXPECT_TRUE(near(px, {255, 255, 255})) << px[0] << " " << px[1] << " " << px[2];
@@ -189,9 +153,12 @@ TEST(ServeServer, ViewsShowTheFilmsLayers) {
     EXPECT_TRUE(near(px, {128, 128, 255})) << px[0] << " " << px[1] << " " << px[2];
     c.send(R"({"type": "settings", "view": "depth"})");
     px = settled("depth");
+    // Depth: the wall (plane z = -2, 7 from the camera; focal length 60 / tan 20deg = 164.8 px) at pixel
+    // (120.5, 60.5) is 7 sqrt(1 + (40.5 / 164.8)^2) = 7.21 away; the range is 1.1 x the farthest depth of the
+    // first pass after the change, the preview (80x60): its corner pixel 7 sqrt(1 + (39.5^2 + 29.5^2)
+    // / 82.4^2) = 8.16 -> 8.97. Shown: 1 - 7.21 / 8.97 = 0.197 -> 50.
     EXPECT_EQ(px[0], px[1]);
-    EXPECT_GT(px[0], 5);
-    EXPECT_LT(px[0], 128);
+    EXPECT_NEAR(px[0], 50, 6);
     c.send(R"({"type": "settings", "view": "albedo"})");
     px = settled("albedo");
     EXPECT_TRUE(near(px, {0, 0, 0})) << px[0] << " " << px[1] << " " << px[2];  // the wall's Kd is 0
@@ -206,23 +173,26 @@ TEST(ServeServer, BadMessagesGetErrorsAndTheServerGoesOn) {
         EXPECT_NE(c.until("error")["message"].get<std::string>().find("not valid JSON"), std::string::npos);
         c.send(R"({"type": "volume", "index": 7, "translation": [0, 0, 0]})");
         EXPECT_NE(c.until("error")["message"].get<std::string>().find("volume.index"), std::string::npos);
-        c.send(R"({"type": "volume", "index": 0, "translation": [1e8, 0, 0]})");  // parses; beyond no bound here
+        c.send(
+            R"({"type": "volume", "index": 0, "translation": [1e8, 0, 0]})");  // parses; beyond no bound here
         c.send(R"({"type": "use_camera", "index": 3})");
         EXPECT_NE(c.until("error")["message"].get<std::string>().find("use_camera.index"), std::string::npos);
         // Oversized: the server closes this page's socket.
         c.send(std::string(k_max_message_bytes + 10, ' '));
-        EXPECT_THROW(
-            for (int i = 0; i < 10000; ++i) c.next(), boost::system::system_error);
+        EXPECT_THROW(for (int i = 0; i < 10000; ++i) c.next(), boost::system::system_error);
     }
     // A closed page frees its session.
-    for (int i = 0; i < 200 && r.server->sessions() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    for (int i = 0; i < 200 && r.server->sessions() > 0; ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
     EXPECT_EQ(r.server->sessions(), 0u);
     // Two pages at once both get frames.
     Client a(r.server->port()), b(r.server->port());
     a.until("state");
     b.until("state");
     a.send(R"({"type": "camera", "position": [0, 0.5, 5], "forward": [0, 0, -1]})");
-    const auto from_move = [](const json& f) { return std::abs(f["camera"]["position"][1].get<double>() - 0.5) < 1e-6; };
+    const auto from_move = [](const json& f) {
+        return std::abs(f["camera"]["position"][1].get<double>() - 0.5) < 1e-6;
+    };
     a.until("frame", from_move);
     b.until("frame", from_move);
     EXPECT_EQ(r.server->sessions(), 2u);
@@ -254,10 +224,13 @@ TEST(ServeServer, EditSavedIsWhatNerfptRenderRenders) {
         EXPECT_TRUE(saved["notes"].empty()) << saved.dump();
     }
     const fs::path out = scene.parent_path() / "out.exr";
-    ASSERT_EQ(test::run_cli({"render", scene.string(), "-o", out.string(), "--spp", "1"}, scene.parent_path() / "render.log"), 0)
+    ASSERT_EQ(test::run_cli({"render", scene.string(), "-o", out.string(), "--spp", "1"},
+                            scene.parent_path() / "render.log"),
+              0)
         << test::read_text(scene.parent_path() / "render.log");
     const Image image = read_image(out, false);
-    // The camera at (0, 0, 5), 40 degrees: the cube's centre at x = +1 (z = 0) is at pixel 80 + 60 * 1 / (5 tan 20deg).
+    // The camera at (0, 0, 5), 40 degrees: the cube's centre at x = +1 (z = 0) is at pixel 80 + 60 * 1 / (5
+    // tan 20deg).
     const int x_new = int(80 + 60.0 / (5 * std::tan(20 * 3.14159265358979 / 180)));
     const int x_old = int(80 - 60.0 / (5 * std::tan(20 * 3.14159265358979 / 180)));
     const Rgb at_new = image.rgb(x_new, 60), at_old = image.rgb(x_old, 60);

@@ -4,10 +4,6 @@
 // camera it sends, errors for other messages, and a second page starts from the whole state.
 #include <gtest/gtest.h>
 
-#include <boost/asio/connect.hpp>
-#include <boost/asio/ip/tcp.hpp>
-#include <boost/beast/core.hpp>
-#include <boost/beast/websocket.hpp>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -18,56 +14,15 @@
 #include "nerf_test_scene.h"
 #include "serve/server.h"
 #include "serve/training_monitor.h"
+#include "serve_test_client.h"
 #include "test_support.h"
 
 namespace npt::serve {
 namespace {
 namespace fs = std::filesystem;
-namespace asio = boost::asio;
-namespace beast = boost::beast;
-namespace websocket = beast::websocket;
-using tcp = asio::ip::tcp;
 using json = nlohmann::json;
 
-struct Client {
-    asio::io_context ioc;
-    websocket::stream<tcp::socket> ws{ioc};
-    explicit Client(uint16_t port) {
-        tcp::resolver resolver(ioc);
-        asio::connect(ws.next_layer(), resolver.resolve("127.0.0.1", std::to_string(port)));
-        ws.handshake("127.0.0.1:" + std::to_string(port), "/ws");
-    }
-    void send(const std::string& text) {
-        ws.text(true);
-        ws.write(asio::buffer(text));
-    }
-    // JSON text, or a frame's header with "jpeg_bytes".
-    json next() {
-        beast::flat_buffer b;
-        ws.read(b);
-        const std::string data = beast::buffers_to_string(b.data());
-        if (ws.got_text()) return json::parse(data);
-        const uint32_t n = uint32_t(uint8_t(data[0])) | uint32_t(uint8_t(data[1])) << 8 |
-                           uint32_t(uint8_t(data[2])) << 16 | uint32_t(uint8_t(data[3])) << 24;
-        json h = json::parse(data.substr(4, n));
-        h["jpeg_bytes"] = data.size() - 4 - n;
-        EXPECT_EQ(uint8_t(data[4 + n]), 0xFF);  // JPEG SOI
-        EXPECT_EQ(uint8_t(data[5 + n]), 0xD8);
-        return h;
-    }
-    template <typename Fn>
-    json until(const std::string& type, Fn ok, int limit = 5000) {
-        for (int i = 0; i < limit; ++i) {
-            json m = next();
-            if (m["type"] == type && ok(m)) return m;
-        }
-        ADD_FAILURE() << "no '" << type << "' message";
-        return {};
-    }
-    json until(const std::string& type) {
-        return until(type, [](const json&) { return true; });
-    }
-};
+using Client = test::ServeClient;
 
 bool finite_number(const json& j) { return j.is_number() && std::isfinite(j.get<double>()); }
 
@@ -127,8 +82,8 @@ TEST(ServeTraining, PageGetsStatusHeldOutStripAndOrbitWhileACpuModelTrains) {
     EXPECT_GE(snapshots, 1);
     EXPECT_GE(monitor.evals_done(), 1u);
 
-    const json status =
-        page.until("train", [](const json& m) { return m["step"].get<uint64_t>() > 0 && finite_number(m["psnr"]); });
+    const json status = page.until(
+        "train", [](const json& m) { return m["step"].get<uint64_t>() > 0 && finite_number(m["psnr"]); });
     EXPECT_GT(status["step"].get<uint64_t>(), 0u);
     EXPECT_TRUE(finite_number(status["loss"]));
     EXPECT_FALSE(status["points"]["step"].empty());
@@ -142,14 +97,16 @@ TEST(ServeTraining, PageGetsStatusHeldOutStripAndOrbitWhileACpuModelTrains) {
     EXPECT_EQ(eval["strip_width"], 3 * 32);
 
     // The page orbits: a render of the current model from its camera.
-    page.send(R"({"type": "camera", "position": [0, -4, 0.5], "forward": [0, 1, -0.1], "up": [0, 0, 1], "fov_deg": 40})");
+    page.send(
+        R"({"type": "camera", "position": [0, -4, 0.5], "forward": [0, 1, -0.1], "up": [0, 0, 1], "fov_deg": 40})");
     const json frame = page.until("frame");
     EXPECT_EQ(frame["view"], "orbit");
     EXPECT_GT(frame["jpeg_bytes"].get<size_t>(), 100u);
     EXPECT_EQ(frame["width"], 48);
     // Bad input: an error, and the page goes on; a malformed message too.
     page.send(R"({"type": "save"})");
-    EXPECT_NE(page.until("error")["message"].get<std::string>().find("camera messages only"), std::string::npos);
+    EXPECT_NE(page.until("error")["message"].get<std::string>().find("camera messages only"),
+              std::string::npos);
     page.send("{not json");
     EXPECT_NE(page.until("error")["message"].get<std::string>().find("not valid JSON"), std::string::npos);
 
@@ -170,7 +127,8 @@ TEST(ServeTraining, PageGetsStatusHeldOutStripAndOrbitWhileACpuModelTrains) {
         second.send(std::string(k_max_message_bytes + 10, ' '));
         EXPECT_THROW(for (int i = 0; i < 10000; ++i) second.next(), boost::system::system_error);
     }
-    for (int i = 0; i < 200 && server.sessions() > 1; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    for (int i = 0; i < 200 && server.sessions() > 1; ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
     EXPECT_EQ(server.sessions(), 1u);  // the closed page's session is gone, the first one stays
     page.send(R"({"type": "camera", "position": [0, -4, 1], "forward": [0, 1, -0.2], "up": [0, 0, 1]})");
     EXPECT_EQ(page.until("frame")["view"], "orbit");

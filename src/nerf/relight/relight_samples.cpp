@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 
 #include "core/error.h"
 #include "core/rng.h"
@@ -31,6 +32,45 @@ struct Point {
     Ray ray;  // model space: the camera ray the event was drawn on
 };
 
+// The optical depth at which a scattering event is drawn, from a uniform number (exponential).
+float event_optical_depth(float u) { return -std::log1p(-std::min(u, 0.999999f)); }
+
+// Another event on `ray`: a new lattice offset and target depth.
+WaveRay event_redraw(const Ray& ray, Pcg32& rng) {
+    WaveRay r;
+    r.ray = ray;
+    r.jitter = rng.next_float();
+    r.tau_target = event_optical_depth(rng.next_float());
+    return r;
+}
+
+// A random training pixel and its camera ray (model space) with a lattice offset and an event's optical
+// depth; nullopt where the pixel is more transparent than min_alpha (its random numbers are used all the
+// same).
+struct PixelDraw {
+    uint32_t image = 0;
+    float px = 0.0f, py = 0.0f;
+    WaveRay ray;
+    Rgb target;  // the pixel's colour, linear
+};
+std::optional<PixelDraw> draw_opaque_pixel(Pcg32& rng, const Dataset& data, const Mat4& w2m,
+                                           uint8_t min_alpha) {
+    PixelDraw d;
+    d.image = rng.next_u32() % uint32_t(data.cameras.size());
+    d.px = rng.next_float() * float(data.width);
+    d.py = rng.next_float() * float(data.height);
+    d.ray.jitter = rng.next_float();
+    d.ray.tau_target = event_optical_depth(rng.next_float());
+    const int ix = std::min(int(d.px), data.width - 1), iy = std::min(int(d.py), data.height - 1);
+    const uint8_t* pix = data.image(d.image) + (size_t(iy) * data.width + ix) * 4;
+    if (pix[3] < min_alpha) return std::nullopt;
+    const Ray world = generate_pixel_ray(data.cameras[d.image], d.px, d.py);
+    d.ray.ray = Ray{w2m.transform_point(world.o), normalize(w2m.transform_vector(world.d))};
+    d.target = Rgb(srgb_to_linear(pix[0] / 255.0f), srgb_to_linear(pix[1] / 255.0f),
+                   srgb_to_linear(pix[2] / 255.0f));
+    return d;
+}
+
 // Draws 2..D of each found point's event: its camera ray marched again with a new lattice offset and target
 // depth (a ray that finds no event this time keeps the first draw there).
 void draw_more_events(const NerfModel& model, FieldQuery& query, const std::vector<Point>& points,
@@ -43,13 +83,8 @@ void draw_more_events(const NerfModel& model, FieldQuery& query, const std::vect
     if (extra == 0) return;
     std::vector<WaveRay> rays(n * extra);
     for (size_t j = 0; j < n; ++j)
-        for (size_t m = 0; m < extra; ++m) {
-            Pcg32& rng = rngs[found[j]];
-            WaveRay& r = rays[j * extra + m];
-            r.ray = points[found[j]].ray;
-            r.jitter = rng.next_float();
-            r.tau_target = -std::log1p(-std::min(rng.next_float(), 0.999999f));
-        }
+        for (size_t m = 0; m < extra; ++m)
+            rays[j * extra + m] = event_redraw(points[found[j]].ray, rngs[found[j]]);
     march_wavefront(model, query, rays, WaveMode::event);
     for (size_t j = 0; j < n; ++j)
         for (size_t m = 0; m < extra; ++m) {
@@ -61,6 +96,7 @@ void draw_more_events(const NerfModel& model, FieldQuery& query, const std::vect
 // The lit points in a uniform grid of cell `radius`, for the nearest one to a position (27 cells a query).
 class PointGrid {
   public:
+    // Copies the points: the samples they come from grow while the grid is in use.
     PointGrid(const std::vector<Vec3>& points, const std::vector<Vec3>& normals, float radius)
         : m_points(points),
           m_normals(normals),
@@ -129,21 +165,11 @@ void add_borrowing_pixels(const NerfModel& model, const Dataset& data, FieldQuer
         std::vector<Rgb> target;
         std::vector<uint32_t> image;
         for (size_t i = 0; i < n * 2 && rays.size() < n; ++i) {  // about half the pixels are transparent
-            const uint32_t img = rng.next_u32() % uint32_t(data.cameras.size());
-            const float px = rng.next_float() * float(data.width), py = rng.next_float() * float(data.height);
-            const float jitter = rng.next_float(), u_event = rng.next_float();
-            const int ix = std::min(int(px), data.width - 1), iy = std::min(int(py), data.height - 1);
-            const uint8_t* pix = data.image(img) + (size_t(iy) * data.width + ix) * 4;
-            if (pix[3] < min_alpha) continue;
-            const Ray world = generate_pixel_ray(data.cameras[img], px, py);
-            WaveRay r;
-            r.ray = Ray{w2m.transform_point(world.o), normalize(w2m.transform_vector(world.d))};
-            r.jitter = jitter;
-            r.tau_target = -std::log1p(-std::min(u_event, 0.999999f));
-            rays.push_back(r);
-            target.push_back(Rgb(srgb_to_linear(pix[0] / 255.0f), srgb_to_linear(pix[1] / 255.0f),
-                                 srgb_to_linear(pix[2] / 255.0f)));
-            image.push_back(img);
+            const std::optional<PixelDraw> d = draw_opaque_pixel(rng, data, w2m, min_alpha);
+            if (!d) continue;
+            rays.push_back(d->ray);
+            target.push_back(d->target);
+            image.push_back(d->image);
         }
         march_wavefront(model, query, rays, WaveMode::event);
         std::vector<size_t> hit;
@@ -163,12 +189,8 @@ void add_borrowing_pixels(const NerfModel& model, const Dataset& data, FieldQuer
             if (donor[h] >= 0) kept.push_back(h);
         std::vector<WaveRay> more(kept.size() * (draws - 1));
         for (size_t j = 0; j < kept.size(); ++j)
-            for (size_t m = 0; m + 1 < draws; ++m) {
-                WaveRay& r = more[j * (draws - 1) + m];
-                r.ray = rays[hit[kept[j]]].ray;
-                r.jitter = rng.next_float();
-                r.tau_target = -std::log1p(-std::min(rng.next_float(), 0.999999f));
-            }
+            for (size_t m = 0; m + 1 < draws; ++m)
+                more[j * (draws - 1) + m] = event_redraw(rays[hit[kept[j]]].ray, rng);
         march_wavefront(model, query, more, WaveMode::event);
         for (size_t j = 0; j < kept.size(); ++j) {
             const size_t h = kept[j], i = hit[h];
@@ -214,28 +236,16 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
         std::vector<size_t> owner;
         std::vector<Point> pending;
         for (size_t s : todo) {
-            Pcg32& rng = rngs[s];
-            const uint32_t img = rng.next_u32() % uint32_t(data.cameras.size());
-            const float px = rng.next_float() * float(data.width);
-            const float py = rng.next_float() * float(data.height);
-            const float jitter = rng.next_float(), u_event = rng.next_float();
-            const int ix = std::min(int(px), data.width - 1), iy = std::min(int(py), data.height - 1);
-            const uint8_t* pix = data.image(img) + (size_t(iy) * data.width + ix) * 4;
-            if (pix[3] < min_alpha) continue;
-            const Ray world = generate_pixel_ray(data.cameras[img], px, py);
-            WaveRay r;
-            r.ray = Ray{w2m.transform_point(world.o), normalize(w2m.transform_vector(world.d))};
-            r.jitter = jitter;
-            r.tau_target = -std::log1p(-std::min(u_event, 0.999999f));
-            rays.push_back(r);
+            const std::optional<PixelDraw> d = draw_opaque_pixel(rngs[s], data, w2m, min_alpha);
+            if (!d) continue;
+            rays.push_back(d->ray);
             owner.push_back(s);
             Point p;
-            p.image = img;
-            p.pixel = PixelRef{img, px, py, jitter};
-            p.wo = -r.ray.d;
-            p.ray = r.ray;
-            p.target = Rgb(srgb_to_linear(pix[0] / 255.0f), srgb_to_linear(pix[1] / 255.0f),
-                           srgb_to_linear(pix[2] / 255.0f));
+            p.image = d->image;
+            p.pixel = PixelRef{d->image, d->px, d->py, d->ray.jitter};
+            p.wo = -d->ray.ray.d;
+            p.ray = d->ray.ray;
+            p.target = d->target;
             pending.push_back(p);
         }
         march_wavefront(model, query, rays, WaveMode::event);
