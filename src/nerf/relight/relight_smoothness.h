@@ -1,6 +1,6 @@
 // The relight fit's smoothness prior between a query point and its partner a small random distance away: the
-// squared differences of their albedo (3 channels) and roughness as logits and of their unit normals, from the
-// intrinsic network's raw outputs (intrinsic_field.h). Each surface point's light estimate is noisy (K directions); without the prior
+// squared differences of their albedo (3 channels), roughness and unit normal, from the intrinsic network's raw
+// outputs (intrinsic_field.h). Each surface point's light estimate is noisy (K directions); without the prior
 // the fine grid levels keep that noise as speckle in the albedo.
 #pragma once
 
@@ -14,16 +14,20 @@ namespace npt::nerf {
 // Returns the unweighted term for raw outputs a and b (k_intrinsic_outputs each) and ADDS `weight` times its
 // gradient with respect to them to d_a and d_b.
 inline double smoothness_term(const float* a, const float* b, float* d_a, float* d_b, float weight) {
-    // Albedo and roughness in the network's logit space: a difference of sigmoids would be smallest where the
-    // albedo is dark, and the albedo-light scale is free, so that prior would darken the albedo and brighten the
-    // light; logits weigh a dark and a bright texture alike (for small albedo they are its logarithm).
+    auto sigmoid_slope = [](float s) { return s * (1.0f - s); };  // of the sigmoid, from its value
+    const IntrinsicSample sa = intrinsic_from_outputs(a), sb = intrinsic_from_outputs(b);
     double term = 0;
-    for (int c = 0; c < 4; ++c) {
-        const float diff = a[c] - b[c];
+    for (int c = 0; c < 3; ++c) {
+        const float diff = sa.albedo[c] - sb.albedo[c];
         term += double(diff) * diff;
-        d_a[c] += 2.0f * weight * diff;
-        d_b[c] -= 2.0f * weight * diff;
+        d_a[c] += 2.0f * weight * diff * sigmoid_slope(sa.albedo[c]);
+        d_b[c] -= 2.0f * weight * diff * sigmoid_slope(sb.albedo[c]);
     }
+    const float scale = 1.0f - k_min_roughness;
+    const float dr = sa.roughness - sb.roughness;
+    term += double(dr) * dr;
+    d_a[3] += 2.0f * weight * dr * scale * sigmoid_slope((sa.roughness - k_min_roughness) / scale);
+    d_b[3] -= 2.0f * weight * dr * scale * sigmoid_slope((sb.roughness - k_min_roughness) / scale);
     const Vec3 ra(a[4], a[5], a[6]), rb(b[4], b[5], b[6]);
     const float la = std::max(length(ra), 1e-6f), lb = std::max(length(rb), 1e-6f);
     const Vec3 na = ra / la, nb = rb / lb, dn = na - nb;
