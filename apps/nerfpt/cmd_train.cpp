@@ -118,18 +118,6 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                        k_relight_pixels_gpu, k_relight_pixels_cpu))
         ->check(CLI::Range(0, 1 << 24));
     cmd->add_option(
-           "--relight-smoothness", args.relight.smooth_weight,
-           fmt::format("Weight of the fit's smoothness prior: albedo, roughness and normal close to their "
-                       "values a small distance away (--relight-smoothness-radius), against the speckle a "
-                       "point's noisy light estimate leaves in the fine grid levels (default: {}; 0 turns it off)",
-                       args.relight.smooth_weight))
-        ->check(CLI::Range(0.0f, 100.0f));
-    cmd->add_option("--relight-smoothness-radius", args.relight.smooth_radius,
-                    fmt::format("Standard deviation per axis (model units, the unit cube) of that distance "
-                                "(default: {})",
-                                args.relight.smooth_radius))
-        ->check(CLI::Range(1e-4f, 0.1f));
-    cmd->add_option(
            "--relight-table", args.relight.table_log2,
            fmt::format("log2 of the hash entries per level of the albedo/roughness/normal grid: more "
                        "resolves finer texture, at 12 x 2 x 4 bytes x 2^N of model size (default: {})",

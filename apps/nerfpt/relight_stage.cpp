@@ -54,8 +54,6 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ts.intrinsic.grid.log2_table_size = options.table_log2;
     ts.intrinsic.finest_resolution = options.finest_resolution;
     ts.batch = options.batch ? options.batch : (gpu ? k_relight_batch_gpu : k_relight_batch_cpu);
-    ts.smooth_weight = options.smooth_weight;
-    ts.smooth_radius = options.smooth_radius;
     nerf::RelightTrainer trainer(model, data.cameras.size(), samples, ts);
     nerf::RelightStepStats st;
     while (trainer.steps_done() < options.steps) {

@@ -9,7 +9,6 @@
 #include "nerf/dataset.h"
 #include "nerf/nerf_model.h"
 #include "nerf/relight/relight_samples.h"
-#include "nerf/relight/relight_trainer.h"
 
 namespace npt::cli {
 
@@ -25,8 +24,6 @@ constexpr int k_relight_batch_gpu = 4096, k_relight_batch_cpu = 1024;
 // Borrowing pixels (relight_samples.h): on the CPU 262 144 bought 2.6 dB of albedo and 2 degrees of normals
 // for a third more gather time; on the GPU not yet measured, so none.
 constexpr int k_relight_pixels_gpu = 0, k_relight_pixels_cpu = 262144;
-// The fit's smoothness prior (--relight-smoothness): not yet measured, so off.
-constexpr float k_relight_smoothness = 0.0f;
 
 struct RelightStageOptions {
     uint64_t steps = 1500;  // optimiser steps of the stage
@@ -41,8 +38,6 @@ struct RelightStageOptions {
         nerf::IntrinsicConfig{}.grid.log2_table_size;  // hash entries per level of the intrinsic grid
     float finest_resolution =
         nerf::IntrinsicConfig{}.finest_resolution;  // of the intrinsic grid, x aabb_scale
-    float smooth_weight = k_relight_smoothness;  // the fit's smoothness prior (relight_trainer.h)
-    float smooth_radius = nerf::RelightTrainSettings{}.smooth_radius;
     bool quiet = false;
     nerf::Backend backend = nerf::Backend::cpu;  // where the NeRF is evaluated while gathering surface points
 };

@@ -11,7 +11,6 @@
 #include "materials/bsdf.h"
 #include "nerf/mlp_batch.h"
 #include "nerf/relight/relight_env.h"
-#include "nerf/relight/relight_smoothness.h"
 
 namespace npt::nerf {
 
@@ -41,19 +40,6 @@ inline float srgb_encode(float x, float* d) {
 }
 
 inline float sigmoid_grad(float s) { return s * (1.0f - s); }
-
-// Three independent standard normal numbers (Box-Muller).
-Vec3 gaussian3(Pcg32& rng) {
-    float g[4];
-    for (int j = 0; j < 4; j += 2) {
-        const float u1 = std::max(rng.next_float(), 1e-7f), u2 = rng.next_float();
-        const float r = std::sqrt(-2.0f * std::log(u1));
-        g[j] = r * std::cos(k_two_pi * u2);
-        g[j + 1] = r * std::sin(k_two_pi * u2);
-    }
-    return {g[0], g[1], g[2]};
-}
-
 
 // The BSDF split as f = base * diffuse + specular for a dielectric Principled lobe (F0 grey): diffuse is the
 // colour-independent factor of the base colour, specular the rest.
@@ -136,11 +122,6 @@ RelightStepStats RelightTrainer::compute_gradient() {
         pick[i] = rng.next_u32() % uint32_t(S.size());
         at[i] = S.draw_position(pick[i], rng.next_u32());
     }
-    // The smoothness prior's partners: each query point moved by a Gaussian of smooth_radius per axis.
-    const bool smooth = m_settings.smooth_weight > 0.0f;
-    std::vector<Vec3> near_at(smooth ? batch : 0);
-    for (size_t i = 0; i < near_at.size(); ++i)
-        near_at[i] = at[i] + gaussian3(rng) * m_settings.smooth_radius;
     std::vector<Rgb> env(n_env);
     for (size_t t = 0; t < n_env; ++t)
         env[t] = Rgb(std::exp(params[m_env_offset + 3 * t]), std::exp(params[m_env_offset + 3 * t + 1]),
@@ -152,9 +133,8 @@ RelightStepStats RelightTrainer::compute_gradient() {
     const size_t mlp_params = shape.param_count();
     struct Chunk {
         std::vector<float> enc, out, d_out, d_enc, d_mlp, d_env, d_exposure;
-        std::vector<float> near_enc, near_out, near_d_out, near_d_enc;  // the smoothness partners
-        MlpActivations acts, near_acts;
-        double loss = 0, se = 0, normal_loss = 0, smooth_loss = 0;
+        MlpActivations acts;
+        double loss = 0, se = 0, normal_loss = 0;
     };
     std::vector<Chunk> chunks(n_chunks);
     const HashLevels levels = hash_levels(m_layout.grid);
@@ -175,17 +155,6 @@ RelightStepStats RelightTrainer::compute_gradient() {
             hash_encode(m_layout.grid, levels, params + m_layout.grid_offset,
                         m_layout.grid_position(at[b + i]), &ch.enc[i * dims]);
         mlp_forward_batch(shape, params + m_layout.mlp_offset, ch.enc.data(), n, ch.out.data(), &ch.acts);
-        if (smooth) {
-            ch.near_enc.resize(n * dims);
-            ch.near_out.resize(n * k_intrinsic_outputs);
-            ch.near_d_out.assign(n * k_intrinsic_outputs, 0.0f);
-            ch.near_d_enc.resize(n * dims);
-            for (size_t i = 0; i < n; ++i)
-                hash_encode(m_layout.grid, levels, params + m_layout.grid_offset,
-                            m_layout.grid_position(near_at[b + i]), &ch.near_enc[i * dims]);
-            mlp_forward_batch(shape, params + m_layout.mlp_offset, ch.near_enc.data(), n, ch.near_out.data(),
-                              &ch.near_acts);
-        }
         std::vector<Rgb> lin(static_cast<size_t>(K));
         std::vector<float> wk(static_cast<size_t>(K));
         for (size_t i = 0; i < n; ++i) {
@@ -272,16 +241,9 @@ RelightStepStats RelightTrainer::compute_gradient() {
             d_o[4] = d_raw.x;
             d_o[5] = d_raw.y;
             d_o[6] = d_raw.z;
-            if (smooth)
-                ch.smooth_loss += smoothness_term(o, &ch.near_out[i * k_intrinsic_outputs], d_o,
-                                                  &ch.near_d_out[i * k_intrinsic_outputs],
-                                                  m_settings.smooth_weight * inv_batch);
         }
         mlp_backward_batch(shape, params + m_layout.mlp_offset, ch.enc.data(), ch.acts, ch.d_out.data(),
                            ch.d_mlp.data(), ch.d_enc.data());
-        if (smooth)
-            mlp_backward_batch(shape, params + m_layout.mlp_offset, ch.near_enc.data(), ch.near_acts,
-                               ch.near_d_out.data(), ch.d_mlp.data(), ch.near_d_enc.data());
     });
 
     std::fill(m_grads.begin(), m_grads.end(), 0.0f);
@@ -297,14 +259,9 @@ RelightStepStats RelightTrainer::compute_gradient() {
         for (size_t i = 0; i < n; ++i)
             hash_encode_backward(m_layout.grid, m_layout.grid_position(at[b + i]), &ch.d_enc[i * dims],
                                  grads + m_layout.grid_offset);
-        if (smooth)
-            for (size_t i = 0; i < n; ++i)
-                hash_encode_backward(m_layout.grid, m_layout.grid_position(near_at[b + i]),
-                                     &ch.near_d_enc[i * dims], grads + m_layout.grid_offset);
         stats.loss += ch.loss;
         stats.mse += ch.se;
         stats.normal_loss += ch.normal_loss;
-        stats.smooth_loss += ch.smooth_loss;
     }
     // Priors: a grey mean environment, exposures around 1.
     double mean_log[3] = {0, 0, 0};
@@ -328,9 +285,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
     stats.loss /= double(batch);
     stats.mse /= 3.0 * double(batch);
     stats.normal_loss /= double(batch);
-    stats.smooth_loss /= double(batch);
-    stats.objective =
-        stats.loss + m_settings.normal_weight * stats.normal_loss + m_settings.smooth_weight * stats.smooth_loss + prior;
+    stats.objective = stats.loss + m_settings.normal_weight * stats.normal_loss + prior;
     return stats;
 }
 

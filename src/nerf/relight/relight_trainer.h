@@ -25,11 +25,6 @@ struct RelightTrainSettings {
     float normal_weight = 0.3f;     // weight of |n_pred - n_density|^2 against the photometric loss
     float grey_weight = 1.0f;       // the grey-environment prior
     float exposure_weight = 0.1f;   // pulls log exposures toward 0
-    // The smoothness prior: weight of the squared difference of albedo, roughness and normal between each query
-    // point and a partner moved by a Gaussian of smooth_radius (model units) per axis. Each point's own shading
-    // error (its K light directions are a noisy estimate) otherwise lands in the fine grid levels as speckle.
-    float smooth_weight = 0.0f;
-    float smooth_radius = 0.005f;
     bool learn_exposure = true;
     uint64_t seed = 7;
 };
@@ -39,7 +34,6 @@ struct RelightStepStats {
     double loss = 0;          // photometric Huber loss per point (sRGB)
     double mse = 0;           // per channel, sRGB, for a PSNR
     double normal_loss = 0;   // mean |n_pred - n_density|^2
-    double smooth_loss = 0;   // mean squared difference to the smoothness partners (albedo, roughness, normal)
     double objective = 0;     // what the gradient is of: photometric + weighted normal loss + priors
     double seconds = 0;
 };
