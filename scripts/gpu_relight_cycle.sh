@@ -8,7 +8,7 @@
 # ESTIMATORS=1 also scores the surface-normal estimators the stage can fit to (relight_fields --normals density |
 # depth, at a few steps / stencil widths) on the trained NeRF. VARIANTS="name:ARGS;name:ARGS" re-runs the relight
 # stage alone on copies of the trained model with extra `nerfpt train` ARGS (e.g. --relight-normals density) and
-# scores each one's fields.
+# scores each one's fields (at VARIANT_SPP, default 4). TRAIN_ARGS are added to the first training's arguments.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_out}
@@ -23,8 +23,9 @@ score() {  # score LABEL PRED_DIR [score.py options]
     PYTHONPATH=scripts/exr_shim python3 .gpu/relight/score.py $data "$2" --label "$1" "${@:3}" | tee -a "$out/score.log"
 }
 start=$(date +%s.%N)
+# shellcheck disable=SC2086
 timeout 400 $bin/nerfpt train $data -o $work/dev.npt --backend cuda --time "${TRAIN_SECONDS:-60}" --relightable \
-    --force 2>&1 | tr '\r' '\n' | grep -v -E '^train \[|^relight: (fit|surface) \[' | tee "$out/train.log"
+    --force ${TRAIN_ARGS:-} 2>&1 | tr '\r' '\n' | grep -v -E '^train \[|^relight: (fit|surface) \[' | tee "$out/train.log"
 echo "train + relight wall: $(awk "BEGIN {print $(date +%s.%N) - $start}") s" | tee -a "$out/train.log"
 $bin/nerfpt info $work/dev.npt | tee -a "$out/train.log"
 timeout 300 $bin/relight_fields $work/dev.npt $data/transforms_test.json $work/pred/aov --spp 8 --backend cuda \
@@ -50,7 +51,7 @@ for v in "${variants[@]}"; do
         --relightable $args 2>&1 | tr '\r' '\n' | grep -E 'relight' | grep -v -E '^relight: (fit|surface) \[' |
         sed "s/^/[$name] /" | tee -a "$out/variants.log"
     echo "[$name] relight stage wall: $(awk "BEGIN {print $(date +%s.%N) - $start}") s" | tee -a "$out/variants.log"
-    timeout 200 $bin/relight_fields $work/var.npt $data/transforms_test.json $work/var_$name/aov --spp 4 \
+    timeout 200 $bin/relight_fields $work/var.npt $data/transforms_test.json $work/var_$name/aov --spp "${VARIANT_SPP:-4}" \
         --backend cuda | sed "s/^/[$name] /" | tee -a "$out/fields.log"
     score "variant-$name" $work/var_$name --normals-zup
 done
