@@ -111,7 +111,7 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
         ->check(CLI::Range(0.0f, 0.5f));
     cmd->add_option(
            "--relight-pixels", args.relight.borrowing_pixels,
-           fmt::format("Training pixels (at most: the images may hold fewer object pixels) that supervise the "
+           fmt::format("Training pixels (drawn at random, with replacement) that supervise the "
                        "albedo without light directions of their own: "
                        "each borrows the normal and light of the nearest surface point (one camera ray "
                        "each instead of --relight-directions light rays; default: {} on a GPU, {} on the "

@@ -22,9 +22,9 @@ constexpr int k_relight_points_gpu = 1048576, k_relight_points_cpu = 32768;
 constexpr int k_relight_directions_gpu = 8, k_relight_directions_cpu = 16;
 constexpr int k_relight_batch_gpu = 4096, k_relight_batch_cpu = 1024;
 // Borrowing pixels (relight_samples.h): on the CPU 262 144 bought 2.6 dB of albedo and 2 degrees of normals
-// for a third more gather time; on the GPU, every object pixel of the training images (4 M asks for more than
-// dev's 2.2 M) bought 0.2 dB of albedo and 0.5 degrees of normals over 1 M lit points, for 13 s.
-constexpr int k_relight_pixels_gpu = 4194304, k_relight_pixels_cpu = 262144;
+// for a third more gather time; on the GPU 2.2 M bought 0.2 dB of albedo and 0.5 degrees of normals over 1 M lit
+// points, for 13 s.
+constexpr int k_relight_pixels_gpu = 2097152, k_relight_pixels_cpu = 262144;
 
 struct RelightStageOptions {
     uint64_t steps = 1500;  // optimiser steps of the stage

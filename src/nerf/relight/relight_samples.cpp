@@ -159,7 +159,9 @@ void add_borrowing_pixels(const NerfModel& model, const Dataset& data, FieldQuer
     constexpr size_t k_round = size_t(1) << 18;
     Pcg32 rng(mix64(settings.seed ^ 0x626f72726f77ULL), 0);
     size_t added = 0;
-    for (int attempt = 0; attempt < k_tries_per_point && added < wanted; ++attempt) {
+    // Rounds until enough pixels found a donor; pixels are drawn with replacement, so any count can be met
+    // unless rounds stop finding any (no opaque pixel hits the model near a lit point).
+    for (int barren = 0; barren < k_tries_per_point && added < wanted;) {
         const size_t n = std::min(k_round, wanted - added);
         std::vector<WaveRay> rays;
         std::vector<Rgb> target;
@@ -206,6 +208,7 @@ void add_borrowing_pixels(const NerfModel& model, const Dataset& data, FieldQuer
             }
         }
         added += kept.size();
+        barren = kept.empty() ? barren + 1 : 0;
     }
 }
 
