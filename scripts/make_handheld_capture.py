@@ -6,12 +6,13 @@
 # table, the props and the walls rather than on the object.
 #
 #   blender -b --factory-startup --python scripts/make_handheld_capture.py -- OUT_DIR
-#           [--frames 100] [--width 540] [--height 960] [--fov-y 60] [--samples 4] [--seed 1]
+#           [--frames 100] [--width 540] [--height 960] [--fov-y 60] [--samples 4] [--seed 1] [--masks 1]
 #
 # Writes OUT_DIR/render/frame_NNNNN.png (existing frames are skipped, so an interrupted run resumes) and
 # OUT_DIR/truth.json (transforms.json layout: fl_x/fl_y/cx/cy/w/h and, per frame, the OpenGL camera-to-world
 # matrix, which is Blender's camera matrix_world; 'object': the subject's up, supporting plane height, base
-# centre, height and bounding box in Blender's world, metres). To make it a video as a phone would and keep every frame:
+# centre, height and bounding box in Blender's world, metres) and, unless --masks 0, OUT_DIR/masks/frame_NNNNN.png:
+# the object's coverage in each frame (RGBA, alpha = coverage; everything else a holdout). To make it a video as a phone would and keep every frame:
 #   ffmpeg -framerate 30 -i OUT_DIR/render/frame_%05d.png -c:v libx264 -crf 18 -pix_fmt yuv420p OUT_DIR/handheld.mp4
 #   nerfpt curate OUT_DIR/handheld.mp4 -o OUT_DIR/frames --target-frames N
 # (curate numbers frames from 0 as the video does, so truth.json's names match; scripts/bench_poses.sh does this.)
@@ -23,7 +24,7 @@ argv = sys.argv[sys.argv.index('--') + 1:] if '--' in sys.argv else []
 if not argv:
     sys.exit('usage: blender -b --factory-startup --python make_handheld_capture.py -- OUT_DIR [--frames N] ...')
 out_dir = os.path.abspath(argv[0])
-opts = {'frames': 100, 'width': 540, 'height': 960, 'fov-y': 60.0, 'samples': 4, 'seed': 1}
+opts = {'frames': 100, 'width': 540, 'height': 960, 'fov-y': 60.0, 'samples': 4, 'seed': 1, 'masks': 1}
 i = 1
 while i < len(argv):
     key = argv[i].lstrip('-')
@@ -208,4 +209,24 @@ for k, m in enumerate(poses):
     scene.render.filepath = path
     bpy.ops.render.render(write_still=True)
     print(f'make_handheld_capture: frame {k + 1} of {N}', flush=True)
+# The object's ground-truth masks (issue 25): the same cameras with everything but the object a holdout and the
+# film transparent, so alpha is the object's coverage (anti-aliased over the samples); written as 8-bit grey
+# OUT_DIR/masks/frame_NNNNN.png, named as the frames so that `nerfpt eval --masks OUT_DIR/masks` finds them.
+if opts['masks']:
+    object_names = {o.name for o in parts}
+    for o in scene.objects:
+        if o.type == 'MESH' and o.name not in object_names:
+            o.is_holdout = True
+    scene.render.film_transparent = True
+    scene.cycles.samples = 16
+    scene.render.image_settings.color_mode = 'RGBA'
+    os.makedirs(os.path.join(out_dir, 'masks'), exist_ok=True)
+    for k, m in enumerate(poses):
+        path = os.path.join(out_dir, 'masks', f'frame_{k:05d}.png')
+        if os.path.exists(path):
+            continue
+        cam.matrix_world = m
+        scene.render.filepath = path
+        bpy.ops.render.render(write_still=True)
+        print(f'make_handheld_capture: mask {k + 1} of {N}', flush=True)
 print(f'make_handheld_capture: {N} frames of {W}x{H} ({kind}) in {out_dir}')
