@@ -22,6 +22,7 @@ struct EvalArgs {
     std::string backend;  // "", cpu or cuda (backend_option.h)
     bool alpha = false;   // write NAME_alpha.png (needs output)
     std::string masks;    // folder of ground-truth masks, DIR/<image stem>.png; empty: no mask metrics
+    bool object = false;  // render only the model's object box (its object frame), as placement "object" does
 };
 
 CLI::App* add_eval_command(CLI::App& app, EvalArgs& args);

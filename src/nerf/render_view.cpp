@@ -40,6 +40,17 @@ Image render_view(const NerfModel& model, const Camera& camera, const ViewOption
     const float min_t = model.config.march.min_transmittance;
     const float* params = model.params.data();
     const size_t n_tasks = (size_t(h) + k_rows_per_task - 1) / k_rows_per_task;
+    if (options.object_only && !model.object)
+        throw Error("render_view: only the object was asked for, and the model has no object frame (made by "
+                    "`nerfpt capture`)");
+    // Model space -> object space, for the object box's test of each sample.
+    const Mat4 model_to_object =
+        options.object_only ? model.object->object_to_world.inverse() * model.world_to_model.inverse() : Mat4{};
+    auto outside_object = [&](Vec3 p) {
+        const Vec3 o = model_to_object.transform_point(p);
+        const Vec3 lo = model.object->box_min, hi = model.object->box_max;
+        return o.x < lo.x || o.y < lo.y || o.z < lo.z || o.x > hi.x || o.y > hi.y || o.z > hi.z;
+    };
     std::mutex progress_mutex;
     std::atomic<bool> stop{false};
     size_t rows_done = 0;
@@ -59,8 +70,10 @@ Image render_view(const NerfModel& model, const Camera& camera, const ViewOption
                 rs.dir = ray.d;
                 rs.first = rs.next = uint32_t(samples.size());
                 // A fixed mid-step offset: an image must not change from one render to the next.
-                rs.count = uint32_t(march_ray(mp, grid, ray, 0.5f, buf.data()));
-                samples.insert(samples.end(), buf.begin(), buf.begin() + rs.count);
+                const size_t n = march_ray(mp, grid, ray, 0.5f, buf.data());
+                for (size_t s = 0; s < n; ++s)
+                    if (!options.object_only || !outside_object(buf[s].position)) samples.push_back(buf[s]);
+                rs.count = uint32_t(samples.size() - rs.first);
                 rays.push_back(rs);
             }
         FieldBatch batch;

@@ -16,6 +16,10 @@ struct ViewOptions {
     // The GPU renderer's samples per live ray in its first round (they double each round, up to 64); 0: its
     // default. The image does not depend on it, only the time; the CPU ignores it.
     int gpu_first_round = 0;
+    // Only what lies inside the model's object box (its object frame, issue 25) is seen: samples outside it are
+    // dropped, as a `volume` cube with "placement": "object" cuts the model. The CPU renderer only; a model
+    // without an object frame is an error.
+    bool object_only = false;
 };
 
 // Returns an RGBA image: colour composited over the background, as the training images store it (sRGB-encoded
