@@ -8,6 +8,7 @@
 #include <chrono>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -49,7 +50,8 @@ CLI::App* add_eval_command(CLI::App& app, EvalArgs& args) {
         "view's size, or the original size with --downscale (box-filtered). Mask and alpha count where\n"
         "> 0.5. iou: |alpha and mask| / |alpha or mask|. bf: DAVIS's boundary F-measure (seg2bmap\n"
         "boundaries matched within ceil(0.008 x image diagonal) px). leak: mean alpha over the pixels more\n"
-        "than 5 px from the mask (floaters, a table left under the object).\n"
+        "than 5 px from the mask (floaters, a table left under the object). psnr in mask: PSNR over the\n"
+        "mask's pixels only, the object's own quality (with --object, whatever surrounds it is not rendered).\n"
         "Example: nerfpt eval lego.npt ../shared/data/nerf_synthetic/lego --every 8 -o out/lego_eval");
     cmd->add_option("MODEL", args.model, "Model file written by 'nerfpt train' (.npt)")->required();
     cmd->add_option("DATA", args.data,
@@ -219,7 +221,8 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     Progress progress(ps, std::cerr);
     const uint64_t total_rows = uint64_t(views.size()) * uint64_t(data.height);
     nlohmann::json per_image = nlohmann::json::array();
-    double sum_psnr = 0, sum_ssim = 0;
+    double sum_psnr = 0, sum_ssim = 0, sum_psnr_inside = 0;
+    size_t views_inside = 0;
     MaskScores mask_sum;
     for (size_t k = 0; k < views.size(); ++k) {
         const size_t i = views[k];
@@ -239,14 +242,24 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
         std::string mask_text;
         if (with_masks) {
             const MaskScores m = score_mask(render_alpha(render), truth_masks[k]);
+            // A view whose mask is empty (the object out of frame) has no inside: null, left out of the mean.
+            const bool has_inside =
+                std::find(truth_masks[k].on.begin(), truth_masks[k].on.end(), 1) != truth_masks[k].on.end();
+            const double p_in = has_inside ? psnr_inside(render, truth, truth_masks[k])
+                                           : std::numeric_limits<double>::quiet_NaN();
+            if (has_inside) {
+                sum_psnr_inside += p_in;
+                ++views_inside;
+            }
             mask_sum.iou += m.iou;
             mask_sum.boundary.f += m.boundary.f;
             mask_sum.boundary.precision += m.boundary.precision;
             mask_sum.boundary.recall += m.boundary.recall;
             mask_sum.leak += m.leak;
             per_image.back()["mask"] = mask_json(m);
-            mask_text =
-                fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%", m.iou, m.boundary.f, 100 * m.leak);
+            per_image.back()["mask"]["psnr_inside"] = has_inside ? nlohmann::json(p_in) : nlohmann::json(nullptr);
+            mask_text = fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%  psnr in mask {:.2f} dB", m.iou,
+                                    m.boundary.f, 100 * m.leak, p_in);
         }
         if (!args.output.empty()) {
             auto no_interrupt = interrupts.hold();  // complete files, or an interrupt waits for them
@@ -268,14 +281,16 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
     MaskScores mask_mean;
     std::string mask_text;
+    const double psnr_inside_mean = views_inside ? sum_psnr_inside / double(views_inside)
+                                                 : std::numeric_limits<double>::quiet_NaN();
     if (with_masks) {
         mask_mean.iou = mask_sum.iou / n;
         mask_mean.boundary.f = mask_sum.boundary.f / n;
         mask_mean.boundary.precision = mask_sum.boundary.precision / n;
         mask_mean.boundary.recall = mask_sum.boundary.recall / n;
         mask_mean.leak = mask_sum.leak / n;
-        mask_text = fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%", mask_mean.iou, mask_mean.boundary.f,
-                                100 * mask_mean.leak);
+        mask_text = fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%  psnr in mask {:.2f} dB", mask_mean.iou,
+                                mask_mean.boundary.f, 100 * mask_mean.leak, psnr_inside_mean);
     }
     fmt::print("mean over {} views: psnr {:.2f} dB  ssim {:.4f}{}  ({} in all)\n", views.size(), mean_psnr,
                mean_ssim, mask_text, format_seconds(seconds));
@@ -295,6 +310,8 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
             metrics["boundary_tolerance_px"] = boundary_tolerance(data.width, data.height);
             metrics["leak_margin_px"] = k_leak_margin;
             metrics["mean"]["mask"] = mask_json(mask_mean);
+            metrics["mean"]["mask"]["psnr_inside"] =
+                views_inside ? nlohmann::json(psnr_inside_mean) : nlohmann::json(nullptr);
         }
         auto no_interrupt = interrupts.hold();
         write_text_atomic(out_dir / "metrics.json", metrics.dump(2) + "\n");

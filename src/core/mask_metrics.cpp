@@ -213,4 +213,23 @@ Coverage downscale_coverage(const Coverage& coverage, int factor) {
     return out;
 }
 
+double psnr_inside(const Image& a, const Image& b, const Mask& mask) {
+    if (a.width != b.width || a.height != b.height || a.width != mask.width || a.height != mask.height ||
+        a.channels < 3 || b.channels < 3)
+        throw Error("PSNR inside the mask: the render, the truth and the mask differ in size");
+    double sum = 0;
+    size_t n = 0;
+    for (size_t p = 0; p < mask.on.size(); ++p) {
+        if (!mask.on[p]) continue;
+        for (int c = 0; c < 3; ++c) {
+            const double d = double(a.pixels[p * a.channels + c]) - b.pixels[p * b.channels + c];
+            sum += d * d;
+        }
+        ++n;
+    }
+    if (n == 0) throw Error("PSNR inside the mask: the mask covers no pixel");
+    const double mse = sum / (3.0 * double(n));
+    return mse == 0 ? std::numeric_limits<double>::infinity() : -10.0 * std::log10(mse);
+}
+
 }  // namespace npt

@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <vector>
 
+#include "core/image.h"
+
 namespace npt {
 
 // A binary image, row-major from the top-left; on[i] is 0 or 1.
@@ -65,6 +67,10 @@ struct MaskScores {
 // All three for a predicted coverage against a truth mask: IoU and boundary F of predicted > 0.5, with
 // boundary_tolerance of the image.
 MaskScores score_mask(const Coverage& predicted, const Mask& truth);
+
+// PSNR (data range 1, RGB) of a against b over the pixels the mask covers: the object's own quality, whatever
+// surrounds it. Throws npt::Error when the sizes differ or the mask covers nothing; +infinity where equal.
+double psnr_inside(const Image& a, const Image& b, const Mask& mask);
 
 // Reads a mask file (PNG, or anything read_image reads; 8 or 16 bit, values taken as stored, no sRGB curve):
 // its alpha channel when it has one that is not opaque everywhere, else grey (the mean of R, G, B). Throws

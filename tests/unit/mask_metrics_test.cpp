@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 
@@ -206,6 +207,22 @@ TEST(MaskMetrics, ReadsAlphaOrGrey) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("bad.png"), std::string::npos) << e.what();
     }
+}
+
+// The object's PSNR counts only the masked pixels: a 2x2 square whose pixels differ by 0.1 in every channel
+// (MSE 0.01, 20 dB) inside an image that differs by 0.5 everywhere else.
+TEST(MaskMetrics, PsnrInsideTheMaskIgnoresEverythingElse) {
+    Image a(6, 5, 4), b(6, 5, 4);
+    const Mask m = square(6, 5, 1, 2, 2);
+    for (size_t p = 0; p < 30; ++p)
+        for (int c = 0; c < 3; ++c) {
+            a.pixels[p * 4 + c] = 0.3f;
+            b.pixels[p * 4 + c] = m.on[p] ? 0.4f : 0.8f;
+        }
+    EXPECT_NEAR(psnr_inside(a, b, m), 20.0, 1e-5);
+    EXPECT_TRUE(std::isinf(psnr_inside(a, a, m)));
+    test::expect_error_message([&] { psnr_inside(a, b, square(6, 5, 0, 0, 0)); }, {"covers no pixel"});
+    test::expect_error_message([&] { psnr_inside(a, Image(5, 5, 4), m); }, {"differ in size"});
 }
 
 }  // namespace
