@@ -1,6 +1,7 @@
 // The intrinsic fields of a relightable model seen from a data set's cameras: per pixel, the albedo and the normal
 // (training world, the data set's axes) of camera-ray scattering events drawn from the volume weights, averaged
-// over `spp` events (what a relit render's first-event AOVs converge to), as `albedo_N.exr` / `normal_N.exr` for
+// over the events `spp` draws find (what a relit render's first-event AOVs converge to), as `albedo_N.exr` /
+// `normal_N.exr` (and `roughness_N.exr`, grey) for
 // ../shared/data/relight/score.py (run it with --normals-zup). Prints a table of time and coverage.
 //   relight_fields MODEL.npt DATA/transforms_test.json OUT_DIR [--spp 8] [--backend cpu|cuda]
 //                  [--normals predicted|density|depth] [--normal-step 0.004] [--normal-pixels 2]
@@ -94,11 +95,12 @@ int main(int argc, char** argv) try {
                     }
             estimate = depth_stencil_normals(model, *query, data.cameras, pixels, normal_pixels);
         }
-        Image albedo(W, H, 3), normal(W, H, 3);
+        Image albedo(W, H, 3), normal(W, H, 3), roughness(W, H, 3);  // roughness in R, G and B: EXR wants 3 or 4
         for (int y = 0; y < H; ++y)
             for (int x = 0; x < W; ++x) {
                 Rgb a(0.0f);
                 Vec3 n(0.0f);
+                float rough = 0.0f;
                 int hits = 0;
                 for (int s = 0; s < spp; ++s) {
                     const size_t i = (size_t(y) * W + x) * spp + s;
@@ -108,6 +110,7 @@ int main(int argc, char** argv) try {
                     if (fitted) {
                         const IntrinsicSample is = intrinsic.query(r.event_position);
                         a += is.albedo;
+                        rough += is.roughness;
                         nm = is.normal;
                     }
                     if (!estimate.empty()) {
@@ -120,13 +123,19 @@ int main(int argc, char** argv) try {
                     ++hits;
                 }
                 coverage += double(hits) / spp;
-                a = a / float(spp);
-                n = n / float(spp);
+                // Averaged over the draws that found an event, as the renderer's first-hit AOVs are (not
+                // darkened where some rays miss: the ground truth is compared unpremultiplied).
+                const float inv = hits ? 1.0f / float(hits) : 0.0f;
+                a = a * inv;
+                n = n * inv;
+                rough *= inv;
                 std::memcpy(albedo.at(x, y), &a, 12);
                 std::memcpy(normal.at(x, y), &n, 12);
+                for (int c = 0; c < 3; ++c) roughness.at(x, y)[c] = rough;
             }
         write_exr(out / fmt::format("albedo_{}.exr", v), albedo);  // zero when not fitted (score.py wants one)
         write_exr(out / fmt::format("normal_{}.exr", v), normal);
+        if (fitted) write_exr(out / fmt::format("roughness_{}.exr", v), roughness);
     }
     const double secs = Progress::steady_seconds() - t0;
     fmt::print("| views | size | spp | normals | backend | seconds | mean coverage |\n|---|---|---|---|---|---|---|\n");
