@@ -374,13 +374,18 @@ void TrainingMonitor::run() {
         bool finished = false;
         {
             std::unique_lock lock(m_mutex);
-            m_wake.wait_for(lock, std::chrono::duration<double>(m_options.status_interval), [&] {
-                return m_stop || (m_start && !m_held && !m_held_failed) || m_pending || (m_camera && m_model);
+            // A pending camera waits for m_orbit_ready: the wait ends then at the latest.
+            auto timeout = std::chrono::duration_cast<Clock::duration>(
+                std::chrono::duration<double>(m_options.status_interval));
+            if (m_camera && m_model) timeout = std::clamp(m_orbit_ready - Clock::now(), Clock::duration(0), timeout);
+            m_wake.wait_for(lock, timeout, [&] {
+                return m_stop || (m_start && !m_held && !m_held_failed) || m_pending ||
+                       (m_camera && m_model && Clock::now() >= m_orbit_ready);
             });
             if (m_stop) return;
             if (m_start && !m_held && !m_held_failed) start = m_start;
             snapshot = std::move(m_pending);
-            if (m_model || snapshot) camera.swap(m_camera);
+            if ((m_model || snapshot) && Clock::now() >= m_orbit_ready) camera.swap(m_camera);
             finished = m_finished;
         }
         try {
@@ -398,7 +403,11 @@ void TrainingMonitor::run() {
             }
             if (camera && m_model) {
                 m_view_camera = camera;
+                const auto t0 = Clock::now();
                 render_orbit();
+                const double share = std::clamp(m_options.max_orbit_share, 0.01, 1.0);
+                m_orbit_ready = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                                   (Clock::now() - t0) * ((1.0 - share) / share));
             }
         } catch (const std::exception& e) {
             spdlog::warn("serve: live training page: {}", e.what());

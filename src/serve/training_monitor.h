@@ -30,6 +30,10 @@ struct TrainingMonitorOptions {
     int view_side = 192;                 // longest side of the orbit render, pixels
     double min_eval_interval = 10;       // seconds between snapshots, at least
     double max_eval_share = 0.05;        // snapshot + held-out renders, at most this share of the wall time
+    // Orbit renders (a page dragging the current-model view) at most this share of the wall time: each waits
+    // until the one before has been followed by (1 - share) / share times its own duration, so that a drag
+    // on 2 CPU cores cannot take the trainer's cores.
+    double max_orbit_share = 0.25;
     double status_interval = 0.5;        // seconds between status messages
 };
 
@@ -123,6 +127,7 @@ class TrainingMonitor final : public nerf::TrainingObserver, public PageHandler 
     std::unique_ptr<Snapshot> m_model;
     std::optional<CameraMsg> m_view_camera;  // the camera of the last orbit render
     std::chrono::steady_clock::time_point m_next_snapshot{};
+    std::chrono::steady_clock::time_point m_orbit_ready{};  // the next orbit render not before (max_orbit_share)
     std::chrono::steady_clock::time_point m_last_status{};
     uint64_t m_seq = 0;
     JpegEncoder m_jpeg;
