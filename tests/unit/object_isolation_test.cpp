@@ -108,7 +108,9 @@ TEST(ObjectIsolation, CellsBelowThePlaneMarginGoEvenInsideTheBox) {
         return in_blob(p) ||
                (std::fabs(p.x - 0.5f) < 0.03f && std::fabs(p.y - 0.5f) < 0.03f && p.z > 0.2f && p.z < 0.5f);
     });
-    isolate_object(d, input(), IsolationSettings{});
+    IsolationSettings settings;
+    settings.plane_margin_cells = 1.0;
+    isolate_object(d, input(), settings);
     const float cell = 1.0f / k_res;
     for (size_t i = 0; i < d.size(); ++i) {
         const Vec3 p = centre_of(int64_t(i));
