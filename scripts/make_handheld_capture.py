@@ -210,7 +210,7 @@ for k, m in enumerate(poses):
     bpy.ops.render.render(write_still=True)
     print(f'make_handheld_capture: frame {k + 1} of {N}', flush=True)
 # The object's ground-truth masks (issue 25): the same cameras with everything but the object a holdout and the
-# film transparent, so alpha is the object's coverage (anti-aliased over the samples); written as 8-bit grey
+# film transparent, so alpha is the object's coverage (anti-aliased over the samples); written as 8-bit RGBA
 # OUT_DIR/masks/frame_NNNNN.png, named as the frames so that `nerfpt eval --masks OUT_DIR/masks` finds them.
 if opts['masks']:
     object_names = {o.name for o in parts}

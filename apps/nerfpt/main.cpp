@@ -15,6 +15,7 @@
 #include "cmd_eval.h"
 #include "cmd_import_ngp.h"
 #include "cmd_info.h"
+#include "cmd_isolate.h"
 #include "cmd_pose_error.h"
 #include "cmd_poses.h"
 #include "cmd_render.h"
@@ -73,6 +74,8 @@ int main(int argc, char** argv) {
     CLI::App* capture_cmd = add_capture_command(app, capture_args);
     PoseErrorArgs pose_error_args;
     CLI::App* pose_error_cmd = add_pose_error_command(app, pose_error_args);
+    IsolateArgs isolate_args;
+    CLI::App* isolate_cmd = add_isolate_command(app, isolate_args);
     ServeArgs serve_args;
     CLI::App* serve_cmd = add_serve_command(app, serve_args);
     check_numbers_strictly(app);  // NaN, "-1" for an unsigned, octal: refused for every option at once
@@ -104,6 +107,7 @@ int main(int argc, char** argv) {
         if (poses_cmd->parsed()) return run_poses(poses_args, global, interrupts);
         if (capture_cmd->parsed()) return run_capture(capture_args, global, interrupts);
         if (pose_error_cmd->parsed()) return run_pose_error(pose_error_args, global);
+        if (isolate_cmd->parsed()) return run_isolate(isolate_args, global);
         if (serve_cmd->parsed()) return run_serve(serve_args, global, interrupts);
     } catch (const npt::Error& e) {
         print_error(e.what());

@@ -64,6 +64,9 @@ for opt in MODEL --output --res --voxel --crop --format --direction --threshold 
 done
 expect_error 1 "MODEL.*does-not-exist.npt" bake "$tmp/does-not-exist.npt" -o "$tmp/x.vdb"
 expect_error 2 "--res" bake "$tmp/does-not-exist.npt" -o "$tmp/x.vdb" --res 0
+expect_error 1 "model.*does-not-exist.npt" isolate "$tmp/does-not-exist.npt" -o "$tmp/x.npt"
+expect_error 2 "--min-component" isolate "$tmp/does-not-exist.npt" -o "$tmp/x.npt" --min-component 0
+expect_error 2 "--plane-margin" isolate "$tmp/does-not-exist.npt" -o "$tmp/x.npt" --plane-margin -1
 run --version
 if [[ $rc -ne 0 ]] || ! grep -qE '^nerfpt [0-9]+\.[0-9]+' "$tmp/out"; then
     fail "--version: exit code $rc, '$(cat "$tmp/out")'"

@@ -1,0 +1,137 @@
+#include "nerf/object_isolation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include "core/error.h"
+
+namespace npt::nerf {
+
+namespace {
+
+Vec3 row_of(const Mat4& m, size_t r) { return {float(m.m[r][0]), float(m.m[r][1]), float(m.m[r][2])}; }
+
+}  // namespace
+
+IsolationStats isolate_object(std::vector<float>& density, const IsolationInput& in,
+                              const IsolationSettings& s) {
+    const int64_t R = in.resolution;
+    const int64_t per_cascade = R * R * R;
+    if (in.cascades < 1 || R < 1 || int64_t(density.size()) != int64_t(in.cascades) * per_cascade)
+        throw Error("isolate_object: the occupancy grid holds " + std::to_string(density.size()) +
+                    " cells, not cascades x resolution^3 = " + std::to_string(in.cascades) + " x " +
+                    std::to_string(R) + "^3");
+    if (s.plane_margin_cells < 0 || s.min_component_cells < 1)
+        throw Error("isolate_object: plane margin must be >= 0 cells and the component size >= 1 cell");
+
+    double sum = 0;
+    for (float d : density) sum += double(d);
+    const float mean = float(sum / double(density.size()));
+    const float threshold = std::min(in.occupied_threshold, mean);
+
+    // Object space: z is the height above the plane. A model-space cell of side h spans, along object z, the
+    // row-2 extent h * (|r20| + |r21| + |r22|); its lowest point is the centre's height minus half that.
+    const Vec3 up_row = row_of(in.model_to_object, 2);
+    const float z_extent_per_model_unit = std::fabs(up_row.x) + std::fabs(up_row.y) + std::fabs(up_row.z);
+    const float object_per_model = std::sqrt(float(in.model_to_object.m[0][0] * in.model_to_object.m[0][0] +
+                                                   in.model_to_object.m[1][0] * in.model_to_object.m[1][0] +
+                                                   in.model_to_object.m[2][0] * in.model_to_object.m[2][0]));
+    const float cell0 = object_per_model / float(R);  // a cascade-0 cell's side in object units
+    const float z_floor = float(s.plane_margin_cells) * cell0;
+
+    IsolationStats st;
+    std::vector<uint8_t> in_region(density.size(), 0);
+    for (int c = 0; c < in.cascades; ++c) {
+        const float size = float(1 << c);
+        const float lo = 0.5f - 0.5f * size;
+        const float h = size / float(R);
+        for (int64_t z = 0; z < R; ++z)
+            for (int64_t y = 0; y < R; ++y)
+                for (int64_t x = 0; x < R; ++x) {
+                    const size_t i = size_t(int64_t(c) * per_cascade + x + y * R + z * R * R);
+                    const bool occupied = density[i] > threshold;
+                    st.occupied_before += occupied;
+                    const Vec3 centre{lo + (float(x) + 0.5f) * h, lo + (float(y) + 0.5f) * h,
+                                      lo + (float(z) + 0.5f) * h};
+                    const Vec3 o = in.model_to_object.transform_point(centre);
+                    const float lowest = o.z - 0.5f * h * z_extent_per_model_unit;
+                    const bool inside = lowest >= z_floor && o.x >= in.box_min.x && o.x <= in.box_max.x &&
+                                        o.y >= in.box_min.y && o.y <= in.box_max.y && o.z <= in.box_max.z;
+                    in_region[i] = inside;
+                    if (occupied && !inside) ++st.cut_by_region;
+                }
+    }
+
+    // 26-connected components of the occupied cells of cascade 0 inside the region (flood fill with a stack).
+    std::vector<int32_t> label(size_t(per_cascade), -1);
+    std::vector<int64_t> sizes;
+    std::vector<int64_t> stack;
+    for (int64_t i = 0; i < per_cascade; ++i) {
+        if (label[size_t(i)] >= 0 || !in_region[size_t(i)] || !(density[size_t(i)] > threshold)) continue;
+        const int32_t id = int32_t(sizes.size());
+        int64_t count = 0;
+        label[size_t(i)] = id;
+        stack.push_back(i);
+        while (!stack.empty()) {
+            const int64_t j = stack.back();
+            stack.pop_back();
+            ++count;
+            const int64_t x = j % R, y = (j / R) % R, z = j / (R * R);
+            for (int64_t dz = -1; dz <= 1; ++dz)
+                for (int64_t dy = -1; dy <= 1; ++dy)
+                    for (int64_t dx = -1; dx <= 1; ++dx) {
+                        const int64_t nx = x + dx, ny = y + dy, nz = z + dz;
+                        if (nx < 0 || ny < 0 || nz < 0 || nx >= R || ny >= R || nz >= R) continue;
+                        const int64_t k = nx + ny * R + nz * R * R;
+                        if (label[size_t(k)] >= 0 || !in_region[size_t(k)] ||
+                            !(density[size_t(k)] > threshold))
+                            continue;
+                        label[size_t(k)] = id;
+                        stack.push_back(k);
+                    }
+        }
+        sizes.push_back(count);
+    }
+    st.components = int64_t(sizes.size());
+    const int64_t largest =
+        sizes.empty() ? -1 : int64_t(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
+    std::vector<uint8_t> keep(sizes.size(), 0);
+    for (size_t k = 0; k < sizes.size(); ++k) {
+        keep[k] = int64_t(k) == largest || sizes[k] >= s.min_component_cells;
+        st.kept_components += keep[k];
+        if (!keep[k]) st.cut_as_floaters += sizes[k];
+    }
+
+    for (size_t i = 0; i < density.size(); ++i) {
+        bool kept;
+        if (int64_t(i) < per_cascade)
+            kept = label[i] >= 0 && keep[size_t(label[i])];
+        else
+            kept = in_region[i] && density[i] > threshold;
+        if (!kept) density[i] = 0.0f;
+        st.occupied_after += kept;
+    }
+    return st;
+}
+
+IsolationStats isolate_model(NerfModel& model, const IsolationSettings& s, const std::string& where) {
+    if (!model.object)
+        throw Error(where +
+                    ": the model has no object frame (OBJF section): `nerfpt capture` stores one when it "
+                    "finds the supporting plane");
+    IsolationInput in;
+    in.cascades = model.occupancy.cascades();
+    in.resolution = model.occupancy.resolution();
+    in.occupied_threshold = model.config.occupancy.threshold;
+    in.model_to_object = (model.world_to_model * model.object->object_to_world).inverse();
+    in.box_min = model.object->box_min;
+    in.box_max = model.object->box_max;
+    std::vector<float> density = model.occupancy.density();
+    const IsolationStats st = isolate_object(density, in, s);
+    model.occupancy.set_density(std::move(density), in.occupied_threshold);
+    return st;
+}
+
+}  // namespace npt::nerf

@@ -1,0 +1,146 @@
+#include "nerf/object_isolation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "core/error.h"
+
+namespace npt::nerf {
+namespace {
+
+constexpr int k_res = 32;
+
+Vec3 centre_of(int64_t i) {
+    const float h = 1.0f / k_res;
+    return {(float(i % k_res) + 0.5f) * h, (float((i / k_res) % k_res) + 0.5f) * h,
+            (float(i / (k_res * k_res)) + 0.5f) * h};
+}
+
+// One cascade of 32^3 cells; `inside(p)` (model space) says which cells hold density 1 (else 0).
+std::vector<float> grid_of(const std::function<bool(Vec3)>& inside) {
+    std::vector<float> d(size_t(k_res) * k_res * k_res, 0.0f);
+    for (size_t i = 0; i < d.size(); ++i) d[i] = inside(centre_of(int64_t(i))) ? 1.0f : 0.0f;
+    return d;
+}
+
+float dist(Vec3 a, Vec3 b) {
+    return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
+}
+
+bool in_blob(Vec3 p) { return dist(p, {0.5f, 0.5f, 0.5f}) < 0.1f; }
+bool in_floater(Vec3 p) {
+    return dist(p, {8.5f / 32, 23.5f / 32, 21.5f / 32}) < 0.04f;
+}  // 7 cells (a cross), in the box
+bool in_slab(Vec3 p) { return p.z > 0.27f && p.z < 0.31f; }            // the table top, at the plane z = 0.3
+bool in_prop(Vec3 p) { return dist(p, {0.9f, 0.9f, 0.45f}) < 0.06f; }  // outside the box
+
+// Object space: the plane z = 0.3 of the model is z = 0, the box +-0.3 around x = y = 0.5, 0.5 high.
+IsolationInput input() {
+    IsolationInput in;
+    in.cascades = 1;
+    in.resolution = k_res;
+    in.model_to_object = Mat4::translation(-0.5, -0.5, -0.3);
+    in.box_min = {-0.3f, -0.3f, 0.0f};
+    in.box_max = {0.3f, 0.3f, 0.5f};
+    return in;
+}
+
+TEST(ObjectIsolation, OnlyTheBlobRemainsOfBlobFloaterSlabAndProp) {
+    std::vector<float> d =
+        grid_of([](Vec3 p) { return in_blob(p) || in_floater(p) || in_slab(p) || in_prop(p); });
+    int64_t blob = 0, floater = 0;
+    for (size_t i = 0; i < d.size(); ++i) {
+        blob += in_blob(centre_of(int64_t(i)));
+        floater += in_floater(centre_of(int64_t(i)));
+    }
+    ASSERT_GT(floater, 0);
+    ASSERT_LT(floater, IsolationSettings{}.min_component_cells);
+    const IsolationStats st = isolate_object(d, input(), IsolationSettings{});
+    for (size_t i = 0; i < d.size(); ++i) EXPECT_EQ(d[i] > 0, in_blob(centre_of(int64_t(i)))) << "cell " << i;
+    EXPECT_EQ(st.occupied_after, blob);
+    EXPECT_EQ(st.cut_as_floaters, floater);
+    EXPECT_EQ(st.kept_components, 1);
+}
+
+TEST(ObjectIsolation, AllOfABlobAloneIsKept) {
+    std::vector<float> d = grid_of(in_blob);
+    const std::vector<float> before = d;
+    const IsolationStats st = isolate_object(d, input(), IsolationSettings{});
+    EXPECT_EQ(d, before);
+    EXPECT_EQ(st.cut_by_region + st.cut_as_floaters, 0);
+}
+
+TEST(ObjectIsolation, ASecondPartAsLargeAsTheThresholdIsKept) {
+    // A second blob of 2x2x2 cells (8, the threshold) apart from the first: a real part, kept.
+    const auto second = [](Vec3 p) {
+        return p.x > 0.75f && p.x < 0.8125f && p.y > 0.5f && p.y < 0.5625f && p.z > 0.5f && p.z < 0.5625f;
+    };
+    std::vector<float> d = grid_of([&](Vec3 p) { return in_blob(p) || second(p); });
+    const IsolationStats st = isolate_object(d, input(), IsolationSettings{});
+    EXPECT_EQ(st.kept_components, 2);
+    EXPECT_EQ(st.cut_as_floaters, 0);
+}
+
+TEST(ObjectIsolation, UpNeedNotBeTheModelsZ) {
+    // The same scene turned so that up is the model's +y: object (x, y, z) = model (x - 0.5, z - 0.5, y -
+    // 0.3).
+    std::vector<float> d = grid_of([](Vec3 p) {
+        const Vec3 q{p.x, p.z, p.y};
+        return in_blob(q) || in_slab(q) || in_prop(q);
+    });
+    IsolationInput in = input();
+    Mat4 m;
+    m.m = {{{1, 0, 0, -0.5}, {0, 0, 1, -0.5}, {0, 1, 0, -0.3}, {0, 0, 0, 1}}};
+    in.model_to_object = m;
+    isolate_object(d, in, IsolationSettings{});
+    for (size_t i = 0; i < d.size(); ++i) {
+        const Vec3 p = centre_of(int64_t(i));
+        EXPECT_EQ(d[i] > 0, in_blob({p.x, p.z, p.y})) << "cell " << i;
+    }
+}
+
+TEST(ObjectIsolation, CellsBelowThePlaneMarginGoEvenInsideTheBox) {
+    // A column from the slab up into the blob: connected to the blob, but what lies under plane + margin
+    // goes.
+    std::vector<float> d = grid_of([](Vec3 p) {
+        return in_blob(p) ||
+               (std::fabs(p.x - 0.5f) < 0.03f && std::fabs(p.y - 0.5f) < 0.03f && p.z > 0.2f && p.z < 0.5f);
+    });
+    IsolationSettings settings;
+    settings.plane_margin_cells = 1.0;
+    isolate_object(d, input(), settings);
+    const float cell = 1.0f / k_res;
+    for (size_t i = 0; i < d.size(); ++i) {
+        const Vec3 p = centre_of(int64_t(i));
+        if (p.z - 0.5f * cell < 0.3f + cell) {
+            EXPECT_EQ(d[i], 0.0f) << "cell " << i;
+        }
+    }
+}
+
+TEST(ObjectIsolation, RefusesAGridOfTheWrongSize) {
+    std::vector<float> d(100, 1.0f);
+    EXPECT_THROW(isolate_object(d, input(), IsolationSettings{}), Error);
+}
+
+}  // namespace
+}  // namespace npt::nerf
+
+namespace npt::nerf {
+namespace {
+
+TEST(ObjectIsolation, AModelWithoutAnObjectFrameIsRefusedNamingTheFile) {
+    NerfModel m;
+    try {
+        isolate_model(m, IsolationSettings{}, "cap/model.npt");
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("cap/model.npt: the model has no object frame"),
+                  std::string::npos);
+    }
+}
+
+}  // namespace
+}  // namespace npt::nerf
