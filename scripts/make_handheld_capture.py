@@ -201,14 +201,22 @@ truth['object'] = {'kind': kind, 'up': [0, 0, 1], 'plane_z': top_z,
                    'height': hi[2] - top_z, 'box_min': lo, 'box_max': hi}
 with open(os.path.join(out_dir, 'truth.json'), 'w') as f:
     json.dump(truth, f, indent=1)
-for k, m in enumerate(poses):
-    path = os.path.join(out_dir, 'render', f'frame_{k:05d}.png')
-    if os.path.exists(path):
-        continue
-    cam.matrix_world = m
-    scene.render.filepath = path
-    bpy.ops.render.render(write_still=True)
-    print(f'make_handheld_capture: frame {k + 1} of {N}', flush=True)
+
+
+def render_poses(folder, what):
+    """Every pose to OUT_DIR/FOLDER/frame_NNNNN.png; existing files are skipped, so a run resumes."""
+    os.makedirs(os.path.join(out_dir, folder), exist_ok=True)
+    for k, m in enumerate(poses):
+        path = os.path.join(out_dir, folder, f'frame_{k:05d}.png')
+        if os.path.exists(path):
+            continue
+        cam.matrix_world = m
+        scene.render.filepath = path
+        bpy.ops.render.render(write_still=True)
+        print(f'make_handheld_capture: {what} {k + 1} of {N}', flush=True)
+
+
+render_poses('render', 'frame')
 # The object's ground-truth masks (issue 25): the same cameras with everything but the object a holdout and the
 # film transparent, so alpha is the object's coverage (anti-aliased over the samples); written as 8-bit RGBA
 # OUT_DIR/masks/frame_NNNNN.png, named as the frames so that `nerfpt eval --masks OUT_DIR/masks` finds them.
@@ -220,13 +228,5 @@ if opts['masks']:
     scene.render.film_transparent = True
     scene.cycles.samples = 16
     scene.render.image_settings.color_mode = 'RGBA'
-    os.makedirs(os.path.join(out_dir, 'masks'), exist_ok=True)
-    for k, m in enumerate(poses):
-        path = os.path.join(out_dir, 'masks', f'frame_{k:05d}.png')
-        if os.path.exists(path):
-            continue
-        cam.matrix_world = m
-        scene.render.filepath = path
-        bpy.ops.render.render(write_still=True)
-        print(f'make_handheld_capture: mask {k + 1} of {N}', flush=True)
+    render_poses('masks', 'mask')
 print(f'make_handheld_capture: {N} frames of {W}x{H} ({kind}) in {out_dir}')

@@ -258,8 +258,8 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
             mask_sum.leak += m.leak;
             per_image.back()["mask"] = mask_json(m);
             per_image.back()["mask"]["psnr_inside"] = has_inside ? nlohmann::json(p_in) : nlohmann::json(nullptr);
-            mask_text = fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%  psnr in mask {:.2f} dB", m.iou,
-                                    m.boundary.f, 100 * m.leak, p_in);
+            mask_text = fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%  psnr in mask {}", m.iou, m.boundary.f,
+                                    100 * m.leak, has_inside ? fmt::format("{:.2f} dB", p_in) : "n/a (empty mask)");
         }
         if (!args.output.empty()) {
             auto no_interrupt = interrupts.hold();  // complete files, or an interrupt waits for them
@@ -289,8 +289,9 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
         mask_mean.boundary.precision = mask_sum.boundary.precision / n;
         mask_mean.boundary.recall = mask_sum.boundary.recall / n;
         mask_mean.leak = mask_sum.leak / n;
-        mask_text = fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%  psnr in mask {:.2f} dB", mask_mean.iou,
-                                mask_mean.boundary.f, 100 * mask_mean.leak, psnr_inside_mean);
+        mask_text = fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%  psnr in mask {}", mask_mean.iou,
+                                mask_mean.boundary.f, 100 * mask_mean.leak,
+                                views_inside ? fmt::format("{:.2f} dB", psnr_inside_mean) : "n/a (empty masks)");
     }
     fmt::print("mean over {} views: psnr {:.2f} dB  ssim {:.4f}{}  ({} in all)\n", views.size(), mean_psnr,
                mean_ssim, mask_text, format_seconds(seconds));

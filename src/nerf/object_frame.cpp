@@ -127,4 +127,8 @@ CropBox object_model_box(const ObjectFrame& f, const Mat4& world_to_model) {
     return box;
 }
 
+Mat4 model_to_object(const ObjectFrame& f, const Mat4& world_to_model) {
+    return (world_to_model * f.object_to_world).inverse();
+}
+
 }  // namespace npt::nerf

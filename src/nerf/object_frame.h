@@ -40,5 +40,7 @@ void object_local_box(const ObjectFrame& frame, Vec3* local_min, Vec3* local_max
 LocalToModel object_local_to_model(const ObjectFrame& frame, const Mat4& world_to_model);
 // The model-space bounding box of the object's box (for the march; it is rotated in model space).
 CropBox object_model_box(const ObjectFrame& frame, const Mat4& world_to_model);
+// Model space -> object space (+Z up, the supporting plane at z = 0), with world_to_model the model's.
+Mat4 model_to_object(const ObjectFrame& frame, const Mat4& world_to_model);
 
 }  // namespace npt::nerf

@@ -125,7 +125,7 @@ IsolationStats isolate_model(NerfModel& model, const IsolationSettings& s, const
     in.cascades = model.occupancy.cascades();
     in.resolution = model.occupancy.resolution();
     in.occupied_threshold = model.config.occupancy.threshold;
-    in.model_to_object = (model.world_to_model * model.object->object_to_world).inverse();
+    in.model_to_object = model_to_object(*model.object, model.world_to_model);
     in.box_min = model.object->box_min;
     in.box_max = model.object->box_max;
     std::vector<float> density = model.occupancy.density();

@@ -44,10 +44,9 @@ Image render_view(const NerfModel& model, const Camera& camera, const ViewOption
         throw Error("render_view: only the object was asked for, and the model has no object frame (made by "
                     "`nerfpt capture`)");
     // Model space -> object space, for the object box's test of each sample.
-    const Mat4 model_to_object =
-        options.object_only ? model.object->object_to_world.inverse() * model.world_to_model.inverse() : Mat4{};
+    const Mat4 to_object = options.object_only ? model_to_object(*model.object, model.world_to_model) : Mat4{};
     auto outside_object = [&](Vec3 p) {
-        const Vec3 o = model_to_object.transform_point(p);
+        const Vec3 o = to_object.transform_point(p);
         const Vec3 lo = model.object->box_min, hi = model.object->box_max;
         return o.x < lo.x || o.y < lo.y || o.z < lo.z || o.x > hi.x || o.y > hi.y || o.z > hi.z;
     };
