@@ -34,9 +34,11 @@ if [[ "${1:-}" == "--sanitize" ]]; then
         # backward run once, the time goes to the test's double-precision finite differences; the same shape's
         # backward runs in MlpBatch.BackwardAdds..., the density network's finite differences still run.
         # WavefrontSegment.AQueued... (7 s): 300 rays marched twice to compare numbers; OtherSegments... runs the
-        # same hand-over code.
+        # same hand-over code. RelightSamples.EventDraws... (~100 s: 300 steps of training before a small
+        # gather): RelightSamples.BorrowingPixels... trains the same model and runs the same gather code.
         slow='NerfTraining\.|BakeRoundTrip\.|TrainResume\.|EvalViewCli\.|FitTimeMapping'
         slow+='|MlpBatch\.GradientsMatchFiniteDifferencesColourNetwork|WavefrontSegment\.AQueuedNerfSegment'
+        slow+='|RelightSamples\.EventDrawsLieOnThePointsCameraRay'
         (cd build-san && ctest -L unit -E "$slow" --output-on-failure -j "$jobs" "$@")
     else
         cmake --build build-san -j "$jobs" --target nerfpt_unit_tests nerfpt_cli fuzzers

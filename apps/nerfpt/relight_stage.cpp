@@ -54,6 +54,8 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ts.intrinsic.grid.log2_table_size = options.table_log2;
     ts.intrinsic.finest_resolution = options.finest_resolution;
     ts.batch = options.batch ? options.batch : (gpu ? k_relight_batch_gpu : k_relight_batch_cpu);
+    ts.specular = options.specular;
+    ts.roughness_prior = options.roughness_prior;
     nerf::RelightTrainer trainer(model, data.cameras.size(), samples, ts);
     nerf::RelightStepStats st;
     while (trainer.steps_done() < options.steps) {

@@ -9,6 +9,7 @@
 #include "nerf/dataset.h"
 #include "nerf/nerf_model.h"
 #include "nerf/relight/relight_samples.h"
+#include "nerf/relight/relight_trainer.h"
 
 namespace npt::cli {
 
@@ -34,6 +35,8 @@ struct RelightStageOptions {
     int event_draws = nerf::RelightSampleSettings{}.event_draws;
     nerf::NormalEstimator normals = nerf::RelightSampleSettings{}.normals;
     float normal_smoothing = nerf::RelightSampleSettings{}.normal_smoothing;
+    nerf::SpecularEstimate specular = nerf::RelightTrainSettings{}.specular;
+    float roughness_prior = nerf::RelightTrainSettings{}.roughness_prior;
     int borrowing_pixels = -1;  // -1: k_relight_pixels_* of the backend
     int table_log2 =
         nerf::IntrinsicConfig{}.grid.log2_table_size;  // hash entries per level of the intrinsic grid

@@ -99,12 +99,14 @@ std::vector<Ray> furnace_rays() {
     return rays;
 }
 
+// 50 000 paths a ray: the standard error is 0.001-0.002 (printed), so 4 of them still catch a 1% loss or gain;
+// the GGX conductor's single-scattering loss without its compensation is 5-40% over these roughnesses.
 void expect_furnace(const scene::Material& m, double expected) {
     scene::Scene s = furnace_scene(m);
     PathSettings ps;
     ps.max_depth = 64;
     for (const Ray& r : furnace_rays()) {
-        Estimate e = estimate(s, r, 200000, ps);
+        Estimate e = estimate(s, r, 50000, ps);
         std::printf("furnace ray y %.1f: %.5f +- %.5f\n", r.o.y, e.mean[0], e.stderr_[0]);
         for (int k = 0; k < 3; ++k)
             EXPECT_NEAR(e.mean[k], expected, 4 * e.stderr_[k] + 1e-6)

@@ -3,7 +3,9 @@
 // differences of its objective, and recovery of a known albedo from synthetic surface points.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -210,7 +212,8 @@ RelightSamples synthetic_samples(int points, int K, bool shadows) {
     return s;
 }
 
-TEST(RelightTrainer, GradientMatchesFiniteDifferencesOfItsObjective) {
+// Both shading estimators (relight_trainer.h), the prefiltered one through its ratio and its split sum.
+void expect_gradient_matches_finite_differences(SpecularEstimate estimate) {
     const NerfModel m = small_model();
     const RelightSamples s = synthetic_samples(64, 8, true);
     RelightTrainSettings ts;
@@ -218,6 +221,8 @@ TEST(RelightTrainer, GradientMatchesFiniteDifferencesOfItsObjective) {
     ts.batch = 64;
     ts.env_width = 8;
     ts.env_height = 4;
+    ts.roughness_prior = 0.05f;  // large enough to show in the MLP's gradient
+    ts.specular = estimate;
     RelightTrainer tr(m, 2, s, ts);
     // Move away from the initial point so that every term has a gradient.
     for (int i = 0; i < 20; ++i) tr.step();
@@ -249,6 +254,14 @@ TEST(RelightTrainer, GradientMatchesFiniteDifferencesOfItsObjective) {
     check(tr.exposure_offset(), p.size(), "exposure");
 }
 
+TEST(RelightTrainer, GradientMatchesFiniteDifferencesOfItsObjective) {
+    expect_gradient_matches_finite_differences(SpecularEstimate::sampled);
+}
+
+TEST(RelightTrainer, PrefilteredGradientMatchesFiniteDifferencesOfItsObjective) {
+    expect_gradient_matches_finite_differences(SpecularEstimate::prefiltered);
+}
+
 TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
     const NerfModel m = small_model();
     const RelightSamples s = synthetic_samples(2048, 16, true);
@@ -261,6 +274,7 @@ TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
     ts.env_width = 8;
     ts.env_height = 4;
     ts.learn_exposure = false;
+    ts.specular = SpecularEstimate::sampled;  // the estimator the targets were made with
     RelightTrainer tr(m, 2, s, ts);
     RelightStepStats st;
     for (int i = 0; i < 1500; ++i) st = tr.step();  // the stage's default; ~43 dB by then (35 at 1000)
@@ -292,6 +306,119 @@ TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
     // what remains is the fit's own error.
     EXPECT_LT(std::sqrt(err / norm), 0.05);
     EXPECT_LT(normal_err / double(got.size()) * 57.29578, 5.0);  // degrees
+}
+
+// The directional albedos of intrinsic_bsdf under a uniform white sky with nothing in the way, by a midpoint
+// rule fine enough for a roughness-0.3 lobe (~4 degrees about the mirror direction; cells of 0.7 x 0.7
+// degrees): the diffuse factor D (per unit base colour) and the specular E, at n_mu view cosines.
+struct ExactShading {
+    static constexpr int n_mu = 24;
+    float diffuse[n_mu], specular[n_mu];
+    explicit ExactShading(float roughness) {
+        IntrinsicSample one, zero;
+        one.roughness = zero.roughness = roughness;
+        one.albedo = Rgb(1.0f);
+        zero.albedo = Rgb(0.0f);
+        const materials::Bsdf b1 = intrinsic_bsdf(one), b0 = intrinsic_bsdf(zero);
+        constexpr int n_theta = 128, n_phi = 512;
+        for (int m = 0; m < n_mu; ++m) {
+            const float mu = mu_at(m);
+            const Vec3 wo(std::sqrt(1.0f - mu * mu), 0.0f, mu);
+            double d = 0, e = 0;
+            for (int i = 0; i < n_theta; ++i) {
+                const double th = (i + 0.5) * 0.5 * M_PI / n_theta;
+                const double dw = std::sin(th) * (0.5 * M_PI / n_theta) * (2 * M_PI / n_phi);
+                for (int j = 0; j < n_phi; ++j) {
+                    const double ph = (j + 0.5) * 2 * M_PI / n_phi;
+                    const Vec3 wi(float(std::sin(th) * std::cos(ph)), float(std::sin(th) * std::sin(ph)),
+                                  float(std::cos(th)));
+                    const float f1 = materials::bsdf_eval(b1, wo, wi).x, f0 = materials::bsdf_eval(b0, wo, wi).x;
+                    d += (f1 - f0) * wi.z * dw;
+                    e += f0 * wi.z * dw;
+                }
+            }
+            diffuse[m] = float(d);
+            specular[m] = float(e);
+        }
+    }
+    static float mu_at(int m) { return 0.05f + 0.95f * float(m) / float(n_mu - 1); }
+    // Linear in mu between the tabulated cosines.
+    void at(float mu, float* d, float* e) const {
+        const float x = std::clamp((mu - 0.05f) / 0.95f, 0.0f, 1.0f) * float(n_mu - 1);
+        const int i = std::min(int(x), n_mu - 2);
+        const float a = x - float(i);
+        *d = (1 - a) * diffuse[i] + a * diffuse[i + 1];
+        *e = (1 - a) * specular[i] + a * specular[i + 1];
+    }
+};
+
+// Points on the sphere of synthetic_samples under a uniform white sky, no shadows, a glossy dielectric
+// (roughness 0.3): targets are the exact shading a * D(mu_o) + E(mu_o) (ExactShading), not any estimator of it.
+// Returns the relative RMS albedo error after the per-channel scale, and the mean fitted roughness.
+struct GlossyFit {
+    double albedo_error = 0, roughness = 0;
+};
+GlossyFit fit_glossy_sphere(SpecularEstimate estimate) {
+    constexpr float k_roughness = 0.3f;
+    const ExactShading exact(k_roughness);
+    RelightSamples s = synthetic_samples(2048, 8, false);
+    for (size_t i = 0; i < s.size(); ++i) {
+        float d, e;
+        exact.at(dot(s.wo[i], s.normal[i]), &d, &e);
+        s.target[i] = true_albedo(s.position[i]) * d + Rgb(e);
+    }
+    RelightTrainSettings ts;
+    ts.intrinsic = small_intrinsic();
+    ts.intrinsic.grid = {6, 2, 14, 8, 1.5f};
+    ts.intrinsic.finest_resolution = 128.0f;
+    ts.intrinsic.width = 32;
+    ts.batch = 256;
+    ts.env_width = 8;
+    ts.env_height = 4;
+    ts.learn_exposure = false;
+    ts.specular = estimate;
+    RelightTrainer tr(small_model(), 2, s, ts);
+    for (int i = 0; i < 1500; ++i) tr.step();
+    NerfModel fitted = small_model();
+    fitted.relight = tr.fields(1.0);
+    const IntrinsicFieldView view = fitted.intrinsic();
+    double num[3] = {0, 0, 0}, den[3] = {0, 0, 0};
+    std::vector<Rgb> got, want;
+    GlossyFit fit;
+    for (size_t i = 0; i < s.size(); i += 4) {
+        const IntrinsicSample q = view.query(s.position[i]);
+        got.push_back(q.albedo);
+        want.push_back(true_albedo(s.position[i]));
+        fit.roughness += q.roughness;
+        for (int c = 0; c < 3; ++c) {
+            num[c] += double(got.back()[c]) * want.back()[c];
+            den[c] += double(got.back()[c]) * got.back()[c];
+        }
+    }
+    double err = 0, norm = 0;
+    for (size_t i = 0; i < got.size(); ++i)
+        for (int c = 0; c < 3; ++c) {
+            const double d = got[i][c] * num[c] / den[c] - want[i][c];
+            err += d * d;
+            norm += double(want[i][c]) * want[i][c];
+        }
+    fit.albedo_error = std::sqrt(err / norm);
+    fit.roughness /= double(got.size());
+    return fit;
+}
+
+// With 8 light directions per point a glossy lobe is missed almost always: the sampled estimator puts the sky's
+// reflection into the albedo (an offset that no per-channel scale removes); the prefiltered one does not. (Under
+// a uniform sky the roughness barely changes the shading, so it is printed, not checked.)
+TEST(RelightTrainer, PrefilteredSpecularRecoversAGlossyAlbedo) {
+    const GlossyFit pre = fit_glossy_sphere(SpecularEstimate::prefiltered);
+    const GlossyFit sampled = fit_glossy_sphere(SpecularEstimate::sampled);
+    std::printf("relative albedo error: prefiltered %.4f, sampled %.4f; mean roughness %.3f / %.3f (truth 0.3)\n",
+                pre.albedo_error, sampled.albedo_error, pre.roughness, sampled.roughness);
+    // 0.053 measured: on targets made by its own estimator the fit gets within 0.05 (RecoversAKnownAlbedo...);
+    // the tabulated directional albedos and the cosine-prefiltered 8x4 sky add a little. Sampled: 0.49.
+    EXPECT_LT(pre.albedo_error, 0.08);
+    EXPECT_LT(pre.albedo_error, 0.5 * sampled.albedo_error);
 }
 
 }  // namespace

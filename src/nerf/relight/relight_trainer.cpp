@@ -11,6 +11,7 @@
 #include "materials/bsdf.h"
 #include "nerf/mlp_batch.h"
 #include "nerf/relight/relight_env.h"
+#include "nerf/relight/specular_prefilter.h"
 
 namespace npt::nerf {
 
@@ -19,6 +20,7 @@ namespace {
 constexpr size_t k_chunk = 128;            // points per parallel task; gradients summed in chunk order
 constexpr float k_roughness_step = 0.01f;  // finite difference of the BSDF in roughness
 constexpr float k_two_pi = 6.28318530717959f;
+constexpr float k_prior_roughness = 0.5f;  // where RelightTrainSettings::roughness_prior pulls
 
 OptimizerConfig relight_optimizer(float lr) {
     OptimizerConfig c;
@@ -48,6 +50,42 @@ struct BsdfSplit {
     float specular;
 };
 
+// The visibility and indirect light the specular lobe about the mirror direction wr sees: the point's own
+// directions weighted toward wr with a spherical Gaussian no narrower than 0.6 rad (K directions over a
+// hemisphere are ~0.6-0.9 rad apart), so that a narrow lobe still reads the nearest few.
+struct LobeLight {
+    float visibility = 1.0f;
+    Rgb indirect{0.0f};
+};
+
+inline LobeLight lobe_light(const RelightSamples& S, uint32_t point, const float* wk, Vec3 wr, float width) {
+    const int K = S.directions;
+    const float s = std::max(width, 0.6f), inv_s2 = 1.0f / (s * s);
+    double total = 0, v = 0, plain = 0;
+    Rgb ind(0.0f), plain_ind(0.0f);
+    int used = 0;
+    for (int k = 0; k < K; ++k) {
+        if (wk[k] == 0.0f) continue;  // below the horizon of the shading frame
+        const size_t sk = size_t(point) * size_t(K) + size_t(k);
+        const float g = std::exp((dot(S.dir[sk], wr) - 1.0f) * inv_s2);
+        total += g;
+        v += g * S.visibility[sk];
+        ind += S.indirect[sk] * g;
+        plain += S.visibility[sk];
+        plain_ind += S.indirect[sk];
+        ++used;
+    }
+    LobeLight l;
+    if (total > 1e-12) {
+        l.visibility = float(v / total);
+        l.indirect = ind * float(1.0 / total);
+    } else if (used > 0) {
+        l.visibility = float(plain / used);
+        l.indirect = plain_ind * (1.0f / float(used));
+    }
+    return l;
+}
+
 inline BsdfSplit split_bsdf(float roughness, Vec3 wo, Vec3 wi) {
     IntrinsicSample s;
     s.roughness = roughness;
@@ -72,6 +110,10 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
         throw Error("relight: the environment needs at least 2x1 texels and the batch one point");
     for (uint32_t img : samples.image)
         if (img >= image_count) throw Error("relight: a point refers to image " + std::to_string(img));
+    if (settings.specular == SpecularEstimate::prefiltered) {
+        m_albedo_table = std::make_shared<const DirectionalAlbedoTable>();
+        m_prefilter = std::make_shared<const EnvPrefilter>(settings.env_width, settings.env_height);
+    }
     m_env_offset = m_layout.total;
     m_exposure_offset = m_env_offset + size_t(settings.env_width) * settings.env_height * 3;
     m_total = m_exposure_offset + image_count;
@@ -127,14 +169,19 @@ RelightStepStats RelightTrainer::compute_gradient() {
         env[t] = Rgb(std::exp(params[m_env_offset + 3 * t]), std::exp(params[m_env_offset + 3 * t + 1]),
                      std::exp(params[m_env_offset + 3 * t + 2]));
 
+    const bool prefiltered = m_prefilter != nullptr;
+    std::vector<Rgb> env_levels;  // the environment prefiltered for the specular lobes
+    if (prefiltered) m_prefilter->apply(env, env_levels);
+
     const int dims = m_layout.grid.output_dims();
     const MlpShape& shape = m_layout.mlp;
     const size_t n_chunks = (batch + k_chunk - 1) / k_chunk;
     const size_t mlp_params = shape.param_count();
     struct Chunk {
         std::vector<float> enc, out, d_out, d_enc, d_mlp, d_env, d_exposure;
+        std::vector<Rgb> d_levels;  // prefiltered: dLoss/d(prefiltered texel), linear radiance
         MlpActivations acts;
-        double loss = 0, se = 0, normal_loss = 0;
+        double loss = 0, se = 0, normal_loss = 0, roughness_prior = 0;
     };
     std::vector<Chunk> chunks(n_chunks);
     const HashLevels levels = hash_levels(m_layout.grid);
@@ -151,12 +198,13 @@ RelightStepStats RelightTrainer::compute_gradient() {
         ch.d_mlp.assign(mlp_params, 0.0f);
         ch.d_env.assign(n_env * 3, 0.0f);
         ch.d_exposure.assign(m_images, 0.0f);
+        if (prefiltered) ch.d_levels.assign(env_levels.size(), Rgb(0.0f));
         for (size_t i = 0; i < n; ++i)
             hash_encode(m_layout.grid, levels, params + m_layout.grid_offset,
                         m_layout.grid_position(at[b + i]), &ch.enc[i * dims]);
         mlp_forward_batch(shape, params + m_layout.mlp_offset, ch.enc.data(), n, ch.out.data(), &ch.acts);
         std::vector<Rgb> lin(static_cast<size_t>(K));
-        std::vector<float> wk(static_cast<size_t>(K));
+        std::vector<float> wk(static_cast<size_t>(K)), gk(static_cast<size_t>(K));
         for (size_t i = 0; i < n; ++i) {
             const uint32_t s = pick[b + i];
             const uint32_t L = S.light_of(s);  // whose normal and light directions (itself unless borrowing)
@@ -173,6 +221,11 @@ RelightStepStats RelightTrainer::compute_gradient() {
             const float r2 = r + k_roughness_step <= 1.0f ? r + k_roughness_step : r - k_roughness_step;
             const float dr = r2 - r;
             Rgb acc_d(0.0f), acc_s(0.0f), acc_d2(0.0f), acc_s2(0.0f);
+            // Prefiltered, the diffuse part is a ratio estimator: the unshadowed diffuse light, E_d(mu_o) times
+            // the cosine-prefiltered environment at n (no sampling noise), times the share of it the point's
+            // directions find unshadowed, num / den (exactly 1 where nothing is in the way); plus their
+            // indirect light. The directions' own estimate froze a noise of ~10-20% into every point's albedo.
+            Rgb num(0.0f), den(0.0f), indirect_d(0.0f);
             for (int k = 0; k < K; ++k) {
                 const size_t sk = size_t(L) * K + k;
                 const Vec3 wi = frame.to_local(S.dir[sk]);
@@ -182,13 +235,54 @@ RelightStepStats RelightTrainer::compute_gradient() {
                 Rgb le(0.0f);
                 for (int j = 0; j < 4; ++j) le += env[taps.index[j]] * taps.weight[j];
                 lin[k] = le * S.visibility[sk] + S.indirect[sk];
-                const BsdfSplit f = split_bsdf(r, wo, wi), f2 = split_bsdf(r2, wo, wi);
                 const float w = dir_weight * wi.z;
-                acc_d += lin[k] * (f.diffuse * w);
-                acc_s += lin[k] * (f.specular * w);
-                acc_d2 += lin[k] * (f2.diffuse * w);
-                acc_s2 += lin[k] * (f2.specular * w);
                 wk[k] = w;
+                if (prefiltered) {
+                    const float g = split_bsdf(r, wo, wi).diffuse * w;
+                    gk[k] = g;
+                    num += le * (S.visibility[sk] * g);
+                    den += le * g;
+                    indirect_d += S.indirect[sk] * g;
+                    continue;
+                }
+                const BsdfSplit f = split_bsdf(r, wo, wi), f2 = split_bsdf(r2, wo, wi);
+                acc_d += lin[k] * (f.diffuse * w);
+                acc_d2 += lin[k] * (f2.diffuse * w);
+                acc_s += lin[k] * (f.specular * w);
+                acc_s2 += lin[k] * (f2.specular * w);
+            }
+            Rgb ratio(1.0f), unshadowed(0.0f);
+            EnvPrefilter::CosineTaps cos_taps{};
+            float e_diffuse = 0.0f;
+            // The specular part: the split sum E_s(mu_o, r) (V L_r + R) about the mirror direction.
+            EnvPrefilter::Taps spec_taps{};
+            float spec_scale = 0.0f;  // dC_specular / dL_prefiltered
+            if (prefiltered && wo.z > 0.0f) {
+                e_diffuse = m_albedo_table->diffuse(wo.z);
+                cos_taps = m_prefilter->cosine_taps(S.normal[L]);
+                Rgb lc(0.0f);
+                for (int j = 0; j < 4; ++j) lc += env_levels[cos_taps.index[j]] * cos_taps.weight[j];
+                unshadowed = lc * e_diffuse;
+                for (int ch3 = 0; ch3 < 3; ++ch3)
+                    if (den[ch3] > 0.0f) ratio[ch3] = num[ch3] / den[ch3];
+                acc_d = unshadowed * ratio + indirect_d;
+                acc_d2 = acc_d;  // the diffuse factor does not depend on the roughness
+
+                const Vec3 wr = S.normal[L] * (2.0f * wo.z) - wo_w;
+                const auto lobe = [&](float rough, EnvPrefilter::Taps* taps, float* scale) {
+                    const float width = specular_lobe_width(rough, wo.z);
+                    const LobeLight ll = lobe_light(S, L, wk.data(), wr, width);
+                    *taps = m_prefilter->taps(wr, width);
+                    Rgb lr(0.0f);
+                    for (int j = 0; j < 8; ++j) lr += env_levels[taps->index[j]] * taps->weight[j];
+                    const float e_spec = m_albedo_table->specular(wo.z, rough);
+                    *scale = e_spec * ll.visibility;
+                    return lr * *scale + ll.indirect * e_spec;
+                };
+                EnvPrefilter::Taps unused;
+                float unused_scale;
+                acc_s = lobe(r, &spec_taps, &spec_scale);
+                acc_s2 = lobe(r2, &unused, &unused_scale);
             }
             const float e = std::exp(params[m_exposure_offset + S.image[s]]);
             Rgb d_c;  // dLoss/dC
@@ -212,23 +306,48 @@ RelightStepStats RelightTrainer::compute_gradient() {
                 d_e += d_c[ch3] * pred[ch3];  // dC/d(log e) = C
             }
             const float sr = (r - k_min_roughness) / (1.0f - k_min_roughness);
+            // The roughness prior: where the capture light says little about the roughness, it stays near
+            // k_prior_roughness instead of drifting.
+            const float dev = r - k_prior_roughness;
+            ch.roughness_prior += double(m_settings.roughness_prior) * dev * dev;
+            d_r += 2.0f * m_settings.roughness_prior * dev * inv_batch;
             d_o[3] = d_r * (1.0f - k_min_roughness) * sigmoid_grad(sr);
             ch.d_exposure[S.image[s]] += d_e;
-            // The environment texels each direction read.
+            // The environment: the prefiltered texels the lobes read, then the texels each direction read
+            // (env = exp(parameter): d_env is in parameter space, d_levels in radiance).
+            if (prefiltered && wo.z > 0.0f) {
+                for (int ch3 = 0; ch3 < 3; ++ch3) {
+                    const float g_d = d_c[ch3] * e * is.albedo[ch3];  // dLoss / d acc_d
+                    for (int j = 0; j < 4; ++j)
+                        ch.d_levels[cos_taps.index[j]][ch3] += g_d * ratio[ch3] * e_diffuse * cos_taps.weight[j];
+                    if (spec_scale > 0.0f)
+                        for (int j = 0; j < 8; ++j)
+                            ch.d_levels[spec_taps.index[j]][ch3] +=
+                                d_c[ch3] * e * spec_scale * spec_taps.weight[j];
+                }
+            }
             for (int k = 0; k < K; ++k) {
                 if (wk[k] == 0.0f) continue;
                 const size_t sk = size_t(L) * K + k;
-                if (S.visibility[sk] <= 0.0f) continue;
                 const EnvTaps taps = env_taps(W, H, S.dir[sk]);
-                const Vec3 wi = frame.to_local(S.dir[sk]);
-                const BsdfSplit f = split_bsdf(r, wo, wi);
-                for (int ch3 = 0; ch3 < 3; ++ch3) {
-                    const float g =
-                        d_c[ch3] * e * (is.albedo[ch3] * f.diffuse + f.specular) * wk[k] * S.visibility[sk];
+                Rgb d_le;  // dLoss / d(the environment's radiance toward direction k)
+                if (prefiltered) {
+                    // d ratio / d le_k = g_k (V_k - ratio) / den
+                    for (int ch3 = 0; ch3 < 3; ++ch3)
+                        d_le[ch3] = den[ch3] > 0.0f ? d_c[ch3] * e * is.albedo[ch3] * unshadowed[ch3] * gk[k] *
+                                                          (S.visibility[sk] - ratio[ch3]) / den[ch3]
+                                                    : 0.0f;
+                } else {
+                    if (S.visibility[sk] <= 0.0f) continue;
+                    const BsdfSplit f = split_bsdf(r, wo, frame.to_local(S.dir[sk]));
+                    for (int ch3 = 0; ch3 < 3; ++ch3)
+                        d_le[ch3] = d_c[ch3] * e * (is.albedo[ch3] * f.diffuse + f.specular) * wk[k] *
+                                    S.visibility[sk];
+                }
+                for (int ch3 = 0; ch3 < 3; ++ch3)
                     for (int j = 0; j < 4; ++j)
                         ch.d_env[size_t(taps.index[j]) * 3 + ch3] +=
-                            g * taps.weight[j] * env[taps.index[j]][ch3];
-                }
+                            d_le[ch3] * taps.weight[j] * env[taps.index[j]][ch3];
             }
             // The normal output follows the density normal.
             const Vec3 raw(o[4], o[5], o[6]);
@@ -249,6 +368,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
     std::fill(m_grads.begin(), m_grads.end(), 0.0f);
     float* grads = m_grads.data();
     RelightStepStats stats;
+    double prior = 0;  // the priors' part of the objective
     for (size_t c = 0; c < n_chunks; ++c) {
         const Chunk& ch = chunks[c];
         for (size_t i = 0; i < mlp_params; ++i) grads[m_layout.mlp_offset + i] += ch.d_mlp[i];
@@ -262,6 +382,15 @@ RelightStepStats RelightTrainer::compute_gradient() {
         stats.loss += ch.loss;
         stats.mse += ch.se;
         stats.normal_loss += ch.normal_loss;
+        prior += ch.roughness_prior / double(batch);
+    }
+    if (prefiltered) {  // through the prefilter to the texels, then through env = exp(parameter)
+        std::vector<Rgb> d_levels(env_levels.size(), Rgb(0.0f)), d_env(n_env, Rgb(0.0f));
+        for (const Chunk& ch : chunks)
+            for (size_t i = 0; i < d_levels.size(); ++i) d_levels[i] += ch.d_levels[i];
+        m_prefilter->backprop(d_levels, d_env);
+        for (size_t t = 0; t < n_env; ++t)
+            for (int c = 0; c < 3; ++c) grads[m_env_offset + 3 * t + size_t(c)] += d_env[t][c] * env[t][c];
     }
     // Priors: a grey mean environment, exposures around 1.
     double mean_log[3] = {0, 0, 0};
@@ -273,7 +402,6 @@ RelightStepStats RelightTrainer::compute_gradient() {
         for (int c = 0; c < 3; ++c)
             grads[m_env_offset + 3 * t + c] +=
                 float(2.0 * m_settings.grey_weight * (mean_log[c] - grey) / n_env);
-    double prior = 0;
     for (int c = 0; c < 3; ++c) prior += m_settings.grey_weight * (mean_log[c] - grey) * (mean_log[c] - grey);
     if (m_settings.learn_exposure)
         for (size_t i = 0; i < m_images; ++i) {

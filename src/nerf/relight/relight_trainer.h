@@ -1,14 +1,18 @@
 // The relight stage: fits the intrinsic fields (albedo, roughness, normal: intrinsic_field.h), the capture
 // environment and an exposure per image to the training pixels, with the trained NeRF's density fixed. For each
 // point of RelightSamples the predicted colour is
-//   C = e_image * (2 pi / K) sum_k (V_k L_env(w_k) + R_k) f(a, r, n; w_o, w_k) max(0, n . w_k)
-// (Monte Carlo over the hemisphere with the precomputed visibility V and the NeRF's indirect light R), with f the
-// relit renderer's BSDF (intrinsic_bsdf) in the frame of the density normal n, compared with the pixel in sRGB
+//   C = e_image * [(2 pi / K) sum_k (V_k L_env(w_k) + R_k) a f_d(r, n; w_o, w_k) max(0, n . w_k) + S]
+// (Monte Carlo over the hemisphere with the precomputed visibility V and the NeRF's indirect light R), with a f_d
+// + f_s the relit renderer's BSDF (intrinsic_bsdf) in the frame of the density normal n, and S its specular part:
+// by default the split sum E_s(mu_o, r) (V_r L_r + R_r) about the mirror direction, L_r the environment
+// prefiltered with the lobe's width (specular_prefilter.h); with SpecularEstimate::sampled the same sum over the
+// K directions with f_s. Compared with the pixel in sRGB
 // (squared error). The normal output learns the density normal by its own loss: the renderer shades with it. Albedo against light has a per-channel scale no image can fix: the prior is
 // an environment whose mean is grey (equal mean log radiance in R, G and B), and exposures whose mean log is 0.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "nerf/adam.h"
@@ -16,6 +20,13 @@
 #include "nerf/relight/relight_samples.h"
 
 namespace npt::nerf {
+
+class DirectionalAlbedoTable;
+class EnvPrefilter;
+
+// How the fit estimates the specular reflection (specular_prefilter.h): `prefiltered`, the split sum about the
+// mirror direction; `sampled`, the same K directions as the diffuse part (which miss glossy lobes).
+enum class SpecularEstimate { prefiltered, sampled };
 
 struct RelightTrainSettings {
     IntrinsicConfig intrinsic;
@@ -25,7 +36,12 @@ struct RelightTrainSettings {
     float normal_weight = 0.3f;     // weight of |n_pred - n_density|^2 against the photometric loss
     float grey_weight = 1.0f;       // the grey-environment prior
     float exposure_weight = 0.1f;   // pulls log exposures toward 0
+    // Pulls each point's roughness toward 0.5: weight of (r - 0.5)^2 per point against the photometric loss.
+    // A smooth capture light constrains the roughness little, and the fit, left free, used low roughness to
+    // turn the environment into a view-dependent texture (sparkling highlights under a small sun).
+    float roughness_prior = 0.0f;
     bool learn_exposure = true;
+    SpecularEstimate specular = SpecularEstimate::sampled;  // measured on dev: docs/benchmarks.md
     uint64_t seed = 7;
 };
 
@@ -65,6 +81,8 @@ class RelightTrainer {
     size_t m_images = 0;
     std::vector<float> m_params, m_grads;
     Adam m_adam;
+    std::shared_ptr<const DirectionalAlbedoTable> m_albedo_table;  // with SpecularEstimate::prefiltered
+    std::shared_ptr<const EnvPrefilter> m_prefilter;
 };
 
 }  // namespace npt::nerf
