@@ -33,7 +33,7 @@ for preview in 1 2; do
         (exec 3<>/dev/tcp/127.0.0.1/$port) 2>/dev/null && break
         sleep 0.2
     done
-    timeout 60 $bin/serve_bench $port --seconds 10 2>&1 | tee -a "$log"
+    timeout 150 $bin/serve_bench $port --seconds 10 2>&1 | tee -a "$log"  # OptiX's first compile: a minute
     kill $server 2>/dev/null
     wait $server 2>/dev/null
     port=$((port + 1))
