@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """The fitted roughness of a relightable model on the test views: percentiles over the object's pixels of the
-roughness_N.exr that bench/relight_fields writes (PRED/aov), where the albedo's alpha (coverage) is > 0.5.
+roughness_N.exr that bench/relight_fields writes (PRED/aov): the pixels it fitted (roughness >= 0.05; 0 where
+no event was found).
 Usage: relight_roughness.py PRED_DIR [LABEL]   (OpenImageIO, or scripts/exr_shim on PYTHONPATH)"""
 import glob, os, sys
 import numpy as np
@@ -21,10 +22,8 @@ pred = sys.argv[1]
 label = sys.argv[2] if len(sys.argv) > 2 else pred
 values = []
 for path in sorted(glob.glob(os.path.join(pred, 'aov', 'roughness_*.exr'))):
-    albedo = path.replace('roughness_', 'albedo_')
     r = read(path)[..., 0]
-    alpha = read(albedo)[..., 3] if os.path.exists(albedo) and read(albedo).shape[2] > 3 else (r > 0)
-    values.append(r[alpha > 0.5])
+    values.append(r[r > 0])
 if not values:
     sys.exit(f"relight_roughness: no roughness_N.exr under {pred}/aov")
 v = np.concatenate(values)

@@ -262,9 +262,8 @@ TEST(RelightTrainer, PrefilteredGradientMatchesFiniteDifferencesOfItsObjective) 
     expect_gradient_matches_finite_differences(SpecularEstimate::prefiltered);
 }
 
-TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
-    const NerfModel m = small_model();
-    const RelightSamples s = synthetic_samples(2048, 16, true);
+// The recovery tests' fit: a grid fine enough for true_albedo's pattern, an 8x4 sky, exposures fixed.
+RelightTrainSettings recovery_settings(SpecularEstimate estimate) {
     RelightTrainSettings ts;
     ts.intrinsic = small_intrinsic();
     ts.intrinsic.grid = {6, 2, 14, 8, 1.5f};  // enough entries for the pattern's finest level without collisions
@@ -274,15 +273,12 @@ TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
     ts.env_width = 8;
     ts.env_height = 4;
     ts.learn_exposure = false;
-    ts.specular = SpecularEstimate::sampled;  // the estimator the targets were made with
-    RelightTrainer tr(m, 2, s, ts);
-    RelightStepStats st;
-    for (int i = 0; i < 1500; ++i) st = tr.step();  // the stage's default; ~43 dB by then (35 at 1000)
-    // The fit reproduces the targets: sRGB PSNR of the last batch.
-    EXPECT_GT(-10.0 * std::log10(st.mse), 35.0);
-    NerfModel fitted = m;
-    fitted.relight = tr.fields(1.0);
-    const IntrinsicFieldView view = fitted.intrinsic();
+    ts.specular = estimate;
+    return ts;
+}
+
+// Relative RMS error of the fitted albedo at every 4th point after the per-channel scale no image can fix.
+double relative_albedo_error(const IntrinsicFieldView& view, const RelightSamples& s) {
     double num[3] = {0, 0, 0}, den[3] = {0, 0, 0};
     std::vector<Rgb> got, want;
     for (size_t i = 0; i < s.size(); i += 4) {
@@ -293,19 +289,35 @@ TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
             den[c] += double(got.back()[c]) * got.back()[c];
         }
     }
-    double err = 0, norm = 0, normal_err = 0;
+    double err = 0, norm = 0;
     for (size_t i = 0; i < got.size(); ++i)
         for (int c = 0; c < 3; ++c) {
             const double d = got[i][c] * num[c] / den[c] - want[i][c];
             err += d * d;
             norm += double(want[i][c]) * want[i][c];
         }
-    for (size_t i = 0; i < s.size(); i += 4)
+    return std::sqrt(err / norm);
+}
+
+TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
+    const NerfModel m = small_model();
+    const RelightSamples s = synthetic_samples(2048, 16, true);
+    // The estimator the targets were made with.
+    RelightTrainer tr(m, 2, s, recovery_settings(SpecularEstimate::sampled));
+    RelightStepStats st;
+    for (int i = 0; i < 1500; ++i) st = tr.step();  // the stage's default; ~43 dB by then (35 at 1000)
+    // The fit reproduces the targets: sRGB PSNR of the last batch.
+    EXPECT_GT(-10.0 * std::log10(st.mse), 35.0);
+    NerfModel fitted = m;
+    fitted.relight = tr.fields(1.0);
+    const IntrinsicFieldView view = fitted.intrinsic();
+    double normal_err = 0;
+    size_t n = 0;
+    for (size_t i = 0; i < s.size(); i += 4, ++n)
         normal_err += std::acos(std::min(1.0f, dot(view.query(s.position[i]).normal, s.normal[i])));
-    // Relative RMS error of the albedo after the per-channel scale no image can fix; the targets are exact, so
-    // what remains is the fit's own error.
-    EXPECT_LT(std::sqrt(err / norm), 0.05);
-    EXPECT_LT(normal_err / double(got.size()) * 57.29578, 5.0);  // degrees
+    // The targets are exact for this estimator, so what remains is the fit's own error.
+    EXPECT_LT(relative_albedo_error(view, s), 0.05);
+    EXPECT_LT(normal_err / double(n) * 57.29578, 5.0);  // degrees
 }
 
 // The directional albedos of intrinsic_bsdf under a uniform white sky with nothing in the way, by a midpoint
@@ -367,43 +379,16 @@ GlossyFit fit_glossy_sphere(SpecularEstimate estimate) {
         exact.at(dot(s.wo[i], s.normal[i]), &d, &e);
         s.target[i] = true_albedo(s.position[i]) * d + Rgb(e);
     }
-    RelightTrainSettings ts;
-    ts.intrinsic = small_intrinsic();
-    ts.intrinsic.grid = {6, 2, 14, 8, 1.5f};
-    ts.intrinsic.finest_resolution = 128.0f;
-    ts.intrinsic.width = 32;
-    ts.batch = 256;
-    ts.env_width = 8;
-    ts.env_height = 4;
-    ts.learn_exposure = false;
-    ts.specular = estimate;
-    RelightTrainer tr(small_model(), 2, s, ts);
+    RelightTrainer tr(small_model(), 2, s, recovery_settings(estimate));
     for (int i = 0; i < 1500; ++i) tr.step();
     NerfModel fitted = small_model();
     fitted.relight = tr.fields(1.0);
     const IntrinsicFieldView view = fitted.intrinsic();
-    double num[3] = {0, 0, 0}, den[3] = {0, 0, 0};
-    std::vector<Rgb> got, want;
     GlossyFit fit;
-    for (size_t i = 0; i < s.size(); i += 4) {
-        const IntrinsicSample q = view.query(s.position[i]);
-        got.push_back(q.albedo);
-        want.push_back(true_albedo(s.position[i]));
-        fit.roughness += q.roughness;
-        for (int c = 0; c < 3; ++c) {
-            num[c] += double(got.back()[c]) * want.back()[c];
-            den[c] += double(got.back()[c]) * got.back()[c];
-        }
-    }
-    double err = 0, norm = 0;
-    for (size_t i = 0; i < got.size(); ++i)
-        for (int c = 0; c < 3; ++c) {
-            const double d = got[i][c] * num[c] / den[c] - want[i][c];
-            err += d * d;
-            norm += double(want[i][c]) * want[i][c];
-        }
-    fit.albedo_error = std::sqrt(err / norm);
-    fit.roughness /= double(got.size());
+    fit.albedo_error = relative_albedo_error(view, s);
+    size_t n = 0;
+    for (size_t i = 0; i < s.size(); i += 4, ++n) fit.roughness += view.query(s.position[i]).roughness;
+    fit.roughness /= double(n);
     return fit;
 }
 
@@ -415,8 +400,9 @@ TEST(RelightTrainer, PrefilteredSpecularRecoversAGlossyAlbedo) {
     const GlossyFit sampled = fit_glossy_sphere(SpecularEstimate::sampled);
     std::printf("relative albedo error: prefiltered %.4f, sampled %.4f; mean roughness %.3f / %.3f (truth 0.3)\n",
                 pre.albedo_error, sampled.albedo_error, pre.roughness, sampled.roughness);
-    // 0.053 measured: on targets made by its own estimator the fit gets within 0.05 (RecoversAKnownAlbedo...);
-    // the tabulated directional albedos and the cosine-prefiltered 8x4 sky add a little. Sampled: 0.49.
+    // The bound is not derived: 0.053 was measured, against 0.49 sampled; 0.08 is the fit's own bound on exact
+    // targets (0.05, RecoversAKnownAlbedo...) with room for the tables and the separable diffuse. The second
+    // check is the one that says what the estimator is for.
     EXPECT_LT(pre.albedo_error, 0.08);
     EXPECT_LT(pre.albedo_error, 0.5 * sampled.albedo_error);
 }

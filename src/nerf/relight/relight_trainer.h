@@ -4,9 +4,11 @@
 //   C = e_image * [(2 pi / K) sum_k (V_k L_env(w_k) + R_k) a f_d(r, n; w_o, w_k) max(0, n . w_k) + S]
 // (Monte Carlo over the hemisphere with the precomputed visibility V and the NeRF's indirect light R), with a f_d
 // + f_s the relit renderer's BSDF (intrinsic_bsdf) in the frame of the density normal n, and S its specular part:
-// by default the split sum E_s(mu_o, r) (V_r L_r + R_r) about the mirror direction, L_r the environment
-// prefiltered with the lobe's width (specular_prefilter.h); with SpecularEstimate::sampled the same sum over the
-// K directions with f_s. Compared with the pixel in sRGB
+// by default (SpecularEstimate::sampled) the same sum over the K directions with f_s. With
+// SpecularEstimate::prefiltered (specular_prefilter.h) S is the split sum E_s(mu_o, r) (V_r L_r + R_r) about the
+// mirror direction, L_r the environment prefiltered with the lobe's width, and the diffuse sum a ratio estimator
+// (the cosine-prefiltered unshadowed light times the share the K directions find unshadowed). Compared with the
+// pixel in sRGB
 // (squared error). The normal output learns the density normal by its own loss: the renderer shades with it. Albedo against light has a per-channel scale no image can fix: the prior is
 // an environment whose mean is grey (equal mean log radiance in R, G and B), and exposures whose mean log is 0.
 #pragma once
@@ -15,6 +17,7 @@
 #include <memory>
 #include <vector>
 
+#include "materials/principled.h"
 #include "nerf/adam.h"
 #include "nerf/nerf_model.h"
 #include "nerf/relight/relight_samples.h"
@@ -24,8 +27,8 @@ namespace npt::nerf {
 class DirectionalAlbedoTable;
 class EnvPrefilter;
 
-// How the fit estimates the specular reflection (specular_prefilter.h): `prefiltered`, the split sum about the
-// mirror direction; `sampled`, the same K directions as the diffuse part (which miss glossy lobes).
+// How the fit estimates its shading (the comment at the top): `sampled`, sums over each point's K directions
+// (which miss glossy lobes); `prefiltered`, prefiltered environments (specular_prefilter.h).
 enum class SpecularEstimate { prefiltered, sampled };
 
 struct RelightTrainSettings {
@@ -83,6 +86,7 @@ class RelightTrainer {
     Adam m_adam;
     std::shared_ptr<const DirectionalAlbedoTable> m_albedo_table;  // with SpecularEstimate::prefiltered
     std::shared_ptr<const EnvPrefilter> m_prefilter;
+    materials::Principled m_diffuse_lobe;  // prefiltered: its principled_diffuse is the ratio's weight
 };
 
 }  // namespace npt::nerf
