@@ -67,6 +67,11 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
     cmd->add_option("--checkpoint-every", args.checkpoint_every,
                     "Steps between checkpoints (default: the config's, 500)")
         ->check(CLI::Range(1, 100000000));
+    cmd->add_option("--surface-smoothness", args.surface_smoothness,
+                    "Weight of a loss that keeps the trained surface smooth where the images do not say "
+                    "otherwise (the config's loss.surface_smoothness; default 0, off): better normals for "
+                    "--relightable. Not with --resume: a model keeps its config")
+        ->check(CLI::Range(0.0, 1e6));
     add_backend_option(cmd, args.backend);
     cmd->add_flag(
         "--relightable", args.relightable,
@@ -198,6 +203,9 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         if (!args.config.empty())
             throw Error("--config: a resumed model keeps the config it was trained with (stored in '" +
                         out.string() + "')");
+        if (args.surface_smoothness >= 0.0f)
+            throw Error("--surface-smoothness: a resumed model keeps the config it was trained with (stored in '" +
+                        out.string() + "')");
         model = nerf::load_model(out);
         if (!model.training)
             throw Error("--resume: '" + out.string() + "' was saved without its training state");
@@ -210,7 +218,8 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     if (!args.resume) {
         const nerf::NerfConfig base =
             backend == nerf::Backend::cuda ? nerf::cuda_default_config() : nerf::NerfConfig{};
-        const nerf::NerfConfig config = args.config.empty() ? base : nerf::load_config(args.config, base);
+        nerf::NerfConfig config = args.config.empty() ? base : nerf::load_config(args.config, base);
+        if (args.surface_smoothness >= 0.0f) config.loss.surface_smoothness = args.surface_smoothness;
         model =
             nerf::create_model(config, data.aabb_scale, nerf::ngp_world_to_model(data.scale, data.offset));
     }
@@ -316,9 +325,12 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
             pt.march, pt.forward, pt.loss, pt.backward, pt.grid_backward, pt.adam, pt.occupancy);
     save();
     interrupts.set_cooperative(false);
-    fmt::print("wrote {} after {} steps ({} of training), last batch psnr {:.2f} dB\n", out.string(),
+    fmt::print("wrote {} after {} steps ({} of training), last batch psnr {:.2f} dB{}\n", out.string(),
                trainer.steps_done(), format_seconds(model.training->elapsed_seconds),
-               nerf::psnr_from_mse(stats.mse));
+               nerf::psnr_from_mse(stats.mse),
+               model.config.loss.surface_smoothness > 0.0f
+                   ? fmt::format(", surface-smoothness loss {:.5f}", stats.smoothness)
+                   : std::string());
     if (observer) {
         observer->on_snapshot(model, trainer.steps_done());  // the model as saved: its held-out PSNR
         observer->on_finish(trainer.steps_done(), model.training->elapsed_seconds, interrupted);

@@ -24,6 +24,7 @@ struct TrainArgs {
     int threads = 0;
     std::string backend;  // "", cpu or cuda (backend_option.h)
     int checkpoint_every = 0;  // 0: the config's
+    float surface_smoothness = -1.0f;  // < 0: the config's loss.surface_smoothness
     bool resume = false;
     bool relightable = false;        // run the relight stage after training (relight_stage.h)
     RelightStageOptions relight;  // --relight-*; steps, points and batch of 0 are the stage's defaults

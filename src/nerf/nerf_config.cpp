@@ -238,6 +238,9 @@ NerfConfig config_from_json(const json& j, const std::string& source, const Nerf
     {
         GroupReader r(j, "loss", source);
         r.read_float("huber_delta", c.loss.huber_delta, 0.0, k_inf, true, true);
+        r.read_float("surface_smoothness", c.loss.surface_smoothness, 0.0, 1e6, false, false);
+        r.read_float("smoothness_spacing", c.loss.smoothness_spacing, 1.0, 256.0, false, false);
+        r.read_float("smoothness_scale", c.loss.smoothness_scale, 0.0, 1e3, true, false);
         r.check_no_unknown();
     }
     {
@@ -289,7 +292,10 @@ json config_to_json(const NerfConfig& c) {
                       {"decay_interval", op.decay_interval},
                       {"decay_base", float_for_json(op.decay_base)},
                       {"ema_decay", float_for_json(op.ema_decay)}};
-    j["loss"] = {{"huber_delta", float_for_json(c.loss.huber_delta)}};
+    j["loss"] = {{"huber_delta", float_for_json(c.loss.huber_delta)},
+                 {"surface_smoothness", float_for_json(c.loss.surface_smoothness)},
+                 {"smoothness_spacing", float_for_json(c.loss.smoothness_spacing)},
+                 {"smoothness_scale", float_for_json(c.loss.smoothness_scale)}};
     const TrainingConfig& t = c.training;
     j["training"] = {{"batch_samples", t.batch_samples},
                      {"max_rays_per_batch", t.max_rays_per_batch},

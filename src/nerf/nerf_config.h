@@ -62,6 +62,12 @@ struct OptimizerConfig {
 
 struct LossConfig {
     float huber_delta = 1.0f;  // instant-ngp's Huber with alpha 1: quadratic for |error| < delta
+    // The surface-smoothness loss (surface_smoothness.h): its weight per group of three rays against the
+    // photometric loss per ray (0: off, the rays are drawn one by one as before), the largest spacing of the
+    // group's pixels, and the bend beyond which the loss lets go (depth edges, creases).
+    float surface_smoothness = 0.0f;
+    float smoothness_spacing = 4.0f;
+    float smoothness_scale = 0.2f;
 };
 
 struct TrainingConfig {

@@ -12,6 +12,8 @@
 #include "nerf/composite.h"
 #include "nerf/field_batch.h"
 #include "nerf/loss.h"
+#include "nerf/surface_smoothness.h"
+#include "nerf/train_pixel.h"
 
 namespace npt::nerf {
 
@@ -116,7 +118,12 @@ StepStats Trainer::compute_gradient() try {
     const NerfConfig& cfg = m_model.config;
     const uint64_t step = m_adam.state().step;
     const uint64_t step_seed = mix64(cfg.training.seed ^ mix64(step + 1));
-    const uint32_t n_rays = st.rays_per_step;
+    // With the smoothness loss the rays come in whole groups (train_pixel.h).
+    const bool grouped = cfg.loss.surface_smoothness > 0.0f;
+    const float spacing = grouped ? cfg.loss.smoothness_spacing : 0.0f;
+    const uint32_t n_rays = grouped ? std::max(st.rays_per_step - st.rays_per_step % k_smoothness_group,
+                                               k_smoothness_group)
+                                    : st.rays_per_step;
     const OccupancyGridView grid = m_model.occupancy.view();
     const Mat4& w2m = m_model.world_to_model;
     const size_t n_images = m_data.cameras.size();
@@ -131,29 +138,20 @@ StepStats Trainer::compute_gradient() try {
         auto& out = task_samples[task];
         const size_t end = std::min<size_t>(n_rays, (task + 1) * k_rays_per_task);
         for (size_t r = task * k_rays_per_task; r < end; ++r) {
-            Pcg32 rng(step_seed, r);
-            const size_t img = rng.next_u32() % n_images;
-            const Camera& cam = m_data.cameras[img];
-            const float px = rng.next_float() * float(m_data.width);
-            const float py = rng.next_float() * float(m_data.height);
-            const int ix = std::min(int(px), m_data.width - 1), iy = std::min(int(py), m_data.height - 1);
-            const uint8_t* pix = m_data.image(img) + (size_t(iy) * m_data.width + ix) * 4;
+            const TrainPixel draw = draw_train_pixel(step_seed, uint32_t(r), uint32_t(n_images), m_data.width,
+                                                     m_data.height, cfg.training.random_background, spacing);
+            const Camera& cam = m_data.cameras[draw.image];
+            const int ix = std::min(int(draw.px), m_data.width - 1), iy = std::min(int(draw.py), m_data.height - 1);
+            const uint8_t* pix = m_data.image(draw.image) + (size_t(iy) * m_data.width + ix) * 4;
             TrainRay& tr = rays[r];
-            tr.background = Rgb(1.0f);
-            if (cfg.training.random_background) {
-                // One draw per statement: the order of a constructor's arguments is unspecified in C++, and
-                // the GPU trainer must draw the same background for the same ray.
-                tr.background.x = rng.next_float();
-                tr.background.y = rng.next_float();
-                tr.background.z = rng.next_float();
-            }
+            tr.background = draw.background;
             const float alpha = pix[3] / 255.0f;
             const Rgb rgb(pix[0] / 255.0f, pix[1] / 255.0f, pix[2] / 255.0f);
             tr.target = rgb * alpha + tr.background * (1.0f - alpha);
-            const Ray world = generate_pixel_ray(cam, px, py);
+            const Ray world = generate_pixel_ray(cam, draw.px, draw.py);
             const Ray model{w2m.transform_point(world.o), normalize(w2m.transform_vector(world.d))};
             ray_dirs[r] = model.d;
-            const int n = march_ray(m_march, grid, model, rng.next_float(), buf.data());
+            const int n = march_ray(m_march, grid, model, draw.jitter, buf.data());
             tr.count = uint32_t(n);
             out.insert(out.end(), buf.begin(), buf.begin() + n);
         }
@@ -170,6 +168,8 @@ StepStats Trainer::compute_gradient() try {
             ++n_kept;
         }
     }
+    // Whole groups only: a group's smoothness term needs all three of its rays.
+    for (; grouped && n_kept % k_smoothness_group != 0; --n_kept) n_samples -= rays[n_kept - 1].count;
     std::vector<Vec3> positions(n_samples), dirs(n_samples);
     std::vector<float> dts(n_samples);
     for (size_t task = 0, g = 0; task < n_tasks; ++task) {
@@ -209,7 +209,7 @@ StepStats Trainer::compute_gradient() try {
     std::vector<double> ray_loss(n_kept), ray_se(n_kept);
     const float inv_rays = 1.0f / float(std::max<size_t>(n_kept, 1));
     const float delta = cfg.loss.huber_delta;
-    tbb::parallel_for(size_t(0), n_kept, [&](size_t r) {
+    auto composite_ray = [&](size_t r) {
         const TrainRay& tr = rays[r];
         const CompositeResult fwd = composite_forward(&sigma[tr.first], &rgb[tr.first], &dts[tr.first],
                                                       int(tr.count), cfg.march.min_transmittance,
@@ -226,7 +226,44 @@ StepStats Trainer::compute_gradient() try {
         if (tr.count > 0)
             composite_backward(&sigma[tr.first], &rgb[tr.first], &dts[tr.first], int(tr.count), fwd,
                                tr.background, grad * inv_rays, &d_sigma[tr.first], &d_rgb[tr.first]);
-    });
+        return fwd;
+    };
+    std::vector<double> group_smoothness;
+    if (!grouped) {
+        tbb::parallel_for(size_t(0), n_kept, [&](size_t r) { composite_ray(r); });
+    } else {
+        // A group's smoothness term only where all three of its rays were kept.
+        const size_t groups = (n_kept + k_smoothness_group - 1) / k_smoothness_group;
+        group_smoothness.assign(groups, 0.0);
+        tbb::parallel_for(size_t(0), groups, [&](size_t g) {
+            const size_t r0 = g * k_smoothness_group;
+            SurfacePoint points[k_smoothness_group];
+            int used[k_smoothness_group] = {};
+            bool whole = true;
+            for (uint32_t k = 0; k < k_smoothness_group; ++k) {
+                const size_t r = r0 + k;
+                if (r >= n_kept) {
+                    whole = false;
+                    continue;
+                }
+                const CompositeResult fwd = composite_ray(r);
+                const TrainRay& tr = rays[r];
+                used[k] = fwd.used;
+                points[k] = surface_point(&sigma[tr.first], &positions[tr.first], &dts[tr.first], used[k]);
+            }
+            if (!whole) return;
+            const SmoothnessTerm term =
+                smoothness_term(points, cfg.loss.surface_smoothness, cfg.loss.smoothness_scale);
+            if (!term.active) return;
+            group_smoothness[g] = term.loss;
+            for (uint32_t k = 0; k < k_smoothness_group; ++k) {
+                const TrainRay& tr = rays[r0 + k];
+                surface_point_backward_add(&sigma[tr.first], &positions[tr.first], &dts[tr.first],
+                                           used[k], points[k], term.d_point[k] * inv_rays,
+                                           &d_sigma[tr.first]);
+            }
+        });
+    }
 
     stats.phases.loss = lap();
 
@@ -269,6 +306,11 @@ StepStats Trainer::compute_gradient() try {
         se += ray_se[r];
     }
     stats.loss = n_kept ? loss / n_kept : 0.0;
+    if (grouped) {
+        double smooth = 0;
+        for (double v : group_smoothness) smooth += v;
+        stats.smoothness = group_smoothness.empty() ? 0.0 : smooth / double(group_smoothness.size());
+    }
     stats.mse = n_kept ? se / (3.0 * n_kept) : 0.0;
     stats.rays = uint32_t(n_kept);
     stats.samples = uint32_t(n_samples);

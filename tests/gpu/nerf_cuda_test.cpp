@@ -156,10 +156,12 @@ TEST(NerfCuda, RenderedPixelsMatchTheCpu) {
     expect_pixels_match(random_model(6, true), false);
 }
 
-// The gradient of one batch (the same rays: both trainers draw them from (seed, step, ray)) on both backends.
-TEST(NerfCuda, GradientOfABatchMatchesTheCpuTrainer) {
+// The gradient of one batch (the same rays: both trainers draw them from (seed, step, ray)) on both backends,
+// with the surface-smoothness loss at `smoothness` (0: off; its rays come in groups of three).
+void expect_gradient_matches_the_cpu(float smoothness) {
     const Dataset train = test::make_sphere_scene({.views = 10, .size = 32, .view_seed = 1});
     NerfConfig cfg = gpu_sphere_config();
+    cfg.loss.surface_smoothness = smoothness;
     cfg.training.batch_samples = 1 << 20;       // the CPU keeps every ray
     cfg.training.cuda_batch_samples = 1 << 17;  // and so does the GPU (its sample buffer holds 8x this)
     NerfModel base = create_model(cfg, train.aabb_scale, ngp_world_to_model(train.scale, train.offset));
@@ -176,9 +178,16 @@ TEST(NerfCuda, GradientOfABatchMatchesTheCpuTrainer) {
     const StepStats sc = cpu.gradient(g_cpu);
     cuda::CudaTrainer gpu(b, train);
     const StepStats sg = gpu.gradient(g_gpu);
-    ASSERT_EQ(sc.rays, 512u);
-    ASSERT_EQ(sg.rays, 512u) << "the GPU dropped rays";
+    const uint32_t rays = smoothness > 0.0f ? 510u : 512u;  // whole groups of three
+    ASSERT_EQ(sc.rays, rays);
+    ASSERT_EQ(sg.rays, rays) << "the GPU dropped rays";
     EXPECT_NEAR(sg.loss, sc.loss, 2e-2 * sc.loss + 1e-6);  // fp16 field: ~1e-3 in colours
+    if (smoothness > 0.0f) {
+        std::printf("surface-smoothness loss per group: CPU %.4e, GPU %.4e\n", sc.smoothness, sg.smoothness);
+        EXPECT_GT(sc.smoothness, 0.0);
+        // The surface points come from fp16 densities: a few 1e-3 of the loss, far from a missing group.
+        EXPECT_NEAR(sg.smoothness, sc.smoothness, 5e-2 * sc.smoothness);
+    }
     const NerfLayout l = a.layout();
     auto rel = [&](size_t begin, size_t end) {
         double num = 0, den = 0;
@@ -199,6 +208,13 @@ TEST(NerfCuda, GradientOfABatchMatchesTheCpuTrainer) {
     EXPECT_LT(density, 3e-2);
     EXPECT_LT(color, 3e-2);
     EXPECT_LT(grid, 3e-2);
+}
+
+TEST(NerfCuda, GradientOfABatchMatchesTheCpuTrainer) { expect_gradient_matches_the_cpu(0.0f); }
+
+TEST(NerfCuda, GradientWithTheSurfaceSmoothnessLossMatchesTheCpuTrainer) {
+    // A weight at which the smoothness term is a large part of the density's gradient.
+    expect_gradient_matches_the_cpu(10.0f);
 }
 
 double held_out_psnr(ViewRendererBackend& r, const Dataset& test) {

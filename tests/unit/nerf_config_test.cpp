@@ -41,6 +41,9 @@ NerfConfig modified_config() {
     c.optimizer.decay_base = 0.5f;
     c.optimizer.ema_decay = 0.99f;
     c.loss.huber_delta = 0.1f;
+    c.loss.surface_smoothness = 0.05f;
+    c.loss.smoothness_spacing = 8.0f;
+    c.loss.smoothness_scale = 0.3f;
     c.training.batch_samples = 1 << 18;
     c.training.max_rays_per_batch = 4096;
     c.training.seed = 18446744073709551615ull;
@@ -72,6 +75,8 @@ TEST(NerfConfig, ModifiedRoundTrip) {
     EXPECT_EQ(back.optimizer.epsilon, 1e-10f);
     EXPECT_EQ(back.optimizer.ema_decay, 0.99f);
     EXPECT_EQ(back.training.seed, 18446744073709551615ull);
+    EXPECT_EQ(back.loss.surface_smoothness, 0.05f);
+    EXPECT_EQ(back.loss.smoothness_spacing, 8.0f);
     EXPECT_FALSE(back.training.random_background);
 }
 
@@ -160,6 +165,9 @@ TEST(NerfConfig, OutOfRange) {
     expect_bad(R"({"optimizer": {"decay_interval": 0}})", {"'optimizer.decay_interval'"});
     expect_bad(R"({"optimizer": {"ema_decay": 1}})", {"'optimizer.ema_decay'"});
     expect_bad(R"({"loss": {"huber_delta": 0}})", {"'loss.huber_delta'"});
+    expect_bad(R"({"loss": {"surface_smoothness": -1}})", {"'loss.surface_smoothness'"});
+    expect_bad(R"({"loss": {"smoothness_spacing": 0.5}})", {"'loss.smoothness_spacing'", "[1, 256]"});
+    expect_bad(R"({"loss": {"smoothness_scale": 0}})", {"'loss.smoothness_scale'"});
     expect_bad(R"({"training": {"batch_samples": 255}})", {"'training.batch_samples'", "[256, 16777216]"});
     expect_bad(R"({"training": {"batch_samples": 16777217}})", {"'training.batch_samples'"});
 }

@@ -20,6 +20,7 @@
 #include "nerf/cuda/hash_grid_kernels.h"
 #include "nerf/cuda/train_kernels.h"
 #include "nerf/pixel_ray.h"
+#include "nerf/train_pixel.h"
 
 namespace npt::nerf::cuda {
 
@@ -93,6 +94,11 @@ struct CudaTrainer::Impl {
 
     void setup();
     void run_batch(uint32_t n_rays, uint64_t step_seed);  // up to and including the gradients
+    // The step's rays: clamped, and whole groups with the smoothness loss (train_pixel.h).
+    uint32_t rays_this_step(uint32_t wanted) const {
+        const uint32_t n = std::clamp(wanted, k_min_rays, max_rays);
+        return model.config.loss.surface_smoothness > 0.0f ? n - n % k_smoothness_group : n;
+    }
     StepStats stats_after(uint32_t n_rays, double seconds);
 };
 
@@ -193,6 +199,8 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     ma.grid = occupancy->view();
     ma.step_seed = step_seed;
     ma.random_background = model.config.training.random_background;
+    const LossConfig& lc = model.config.loss;
+    ma.group_spacing = lc.surface_smoothness > 0.0f ? lc.smoothness_spacing : 0.0f;
     ma.n_rays = n_rays;
     ma.rays = rays;
     ma.samples = samples;
@@ -229,7 +237,9 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     ca.sigma = s_sigma.data();
     ca.rgb = s_rgb.data();
     ca.min_transmittance = model.config.march.min_transmittance;
-    ca.huber_delta = model.config.loss.huber_delta;
+    ca.huber_delta = lc.huber_delta;
+    ca.smoothness_weight = lc.surface_smoothness;
+    ca.smoothness_scale = lc.smoothness_scale;
     ca.compact = {c_pos.data(), c_ray.data(), c_d_sigma.data(), c_d_rgb.data(), capacity};
     ca.counters = ctr;
     composite_loss(ca, stream);
@@ -269,8 +279,9 @@ StepStats CudaTrainer::Impl::stats_after(uint32_t n_rays, double seconds) {
     s.marched = std::min(c.marched, capacity);
     s.loss = c.rays_kept ? c.loss / c.rays_kept : 0.0;
     s.mse = c.rays_kept ? c.squared_error / (3.0 * c.rays_kept) : 0.0;
+    if (model.config.loss.surface_smoothness > 0.0f)
+        s.smoothness = c.smoothness / double((n_rays + k_smoothness_group - 1) / k_smoothness_group);
     s.seconds = seconds;
-    (void)n_rays;
     return s;
 }
 
@@ -291,7 +302,7 @@ StepStats CudaTrainer::step() {
     const NerfConfig& cfg = I.model.config;
     const uint64_t step = I.step;
     const uint64_t step_seed = mix64(cfg.training.seed ^ mix64(step + 1));  // the CPU trainer's
-    const uint32_t n_rays = std::clamp(st.rays_per_step, k_min_rays, I.max_rays);
+    const uint32_t n_rays = I.rays_this_step(st.rays_per_step);
     I.run_batch(n_rays, step_seed);
 
     AdamArgs a;
@@ -365,7 +376,7 @@ StepStats CudaTrainer::gradient(std::vector<float>& grads) {
     Impl& I = *m;
     const TrainingState& st = *I.model.training;
     const uint64_t step_seed = mix64(I.model.config.training.seed ^ mix64(I.step + 1));
-    const uint32_t n_rays = std::clamp(st.rays_per_step, k_min_rays, I.max_rays);
+    const uint32_t n_rays = I.rays_this_step(st.rays_per_step);
     const auto t0 = std::chrono::steady_clock::now();
     I.run_batch(n_rays, step_seed);
     cuda_check(cudaMemcpyAsync(I.host_counters, I.counters.data(), sizeof(StepCounters), cudaMemcpyDeviceToHost,

@@ -5,6 +5,8 @@
 #include "nerf/composite.h"
 #include "nerf/cuda/occupancy_kernels.h"
 #include "nerf/loss.h"
+#include "nerf/surface_smoothness.h"
+#include "nerf/train_pixel.h"
 
 namespace npt::nerf::cuda {
 
@@ -19,26 +21,19 @@ struct TrainRay {
     float jitter;
 };
 __device__ __forceinline__ TrainRay setup_ray(const MarchRaysArgs& a, uint32_t r) {
-    Pcg32 rng(a.step_seed, r);
     const DeviceImages& im = a.images;
-    const uint32_t img = rng.next_u32() % im.count;
-    const float px = rng.next_float() * float(im.width);
-    const float py = rng.next_float() * float(im.height);
-    const int ix = min(int(px), im.width - 1), iy = min(int(py), im.height - 1);
-    const uint32_t pix = im.rgba[size_t(img) * im.width * im.height + size_t(iy) * im.width + ix];
+    const TrainPixel draw =
+        draw_train_pixel(a.step_seed, r, im.count, im.width, im.height, a.random_background, a.group_spacing);
+    const int ix = min(int(draw.px), im.width - 1), iy = min(int(draw.py), im.height - 1);
+    const uint32_t pix = im.rgba[size_t(draw.image) * im.width * im.height + size_t(iy) * im.width + ix];
     TrainRay t;
-    t.background = Rgb(1.0f);
-    if (a.random_background) {
-        t.background.x = rng.next_float();
-        t.background.y = rng.next_float();
-        t.background.z = rng.next_float();
-    }
+    t.background = draw.background;
     const float alpha = float(pix >> 24) / 255.0f;
     const Rgb rgb(float(pix & 0xff) / 255.0f, float((pix >> 8) & 0xff) / 255.0f,
                   float((pix >> 16) & 0xff) / 255.0f);
     t.target = rgb * alpha + t.background * (1.0f - alpha);
-    t.ray = pixel_ray(im.cameras[img], px, py);
-    t.jitter = rng.next_float();
+    t.ray = pixel_ray(im.cameras[draw.image], draw.px, draw.py);
+    t.jitter = draw.jitter;
     return t;
 }
 
@@ -205,43 +200,89 @@ __device__ __forceinline__ double warp_sum(double v) {
     return v;
 }
 
+// Ray r's composite and Huber loss, into *fwd and the colour gradient; false for a dropped ray.
+__device__ __forceinline__ bool ray_forward(const CompositeLossArgs& a, uint32_t r, CompositeResult* fwd, Rgb* grad,
+                                            double* loss, double* se) {
+    if (r >= a.n_rays || a.rays.count[r] == k_ray_dropped) return false;
+    const uint32_t first = a.rays.first[r];
+    *fwd = composite_forward(a.sigma + first, a.rgb + first, a.samples.dt + first, int(a.rays.count[r]),
+                             a.min_transmittance, a.rays.background[r]);
+    const Rgb target = a.rays.target[r];
+    for (int k = 0; k < 3; ++k) {
+        const float diff = fwd->color[k] - target[k];
+        *loss += huber_loss(diff, a.huber_delta, &(*grad)[k]);
+        *se += double(diff) * diff;
+    }
+    return true;
+}
+
+// Compacts ray r's samples before its stop with their gradient (not yet divided by the number of rays: the MLP
+// kernel does); with a smoothness term, its gradient d_point through the ray's surface point is added.
+__device__ __forceinline__ void ray_backward(const CompositeLossArgs& a, uint32_t r, const CompositeResult& fwd,
+                                             Rgb grad, const SurfacePoint* point, Vec3 d_point) {
+    const uint32_t used = uint32_t(fwd.used);
+    if (used == 0) return;
+    const uint32_t first = a.rays.first[r];
+    const uint32_t c = atomicAdd(&a.counters->compacted, used);
+    if (uint64_t(c) + used > a.compact.capacity) return;
+    const float* dt = a.samples.dt + first;
+    composite_backward(a.sigma + first, a.rgb + first, dt, int(used), fwd, a.rays.background[r], grad,
+                       a.compact.d_sigma + c, a.compact.d_rgb + c);
+    if (point)
+        surface_point_backward_add(a.sigma + first, a.samples.pos + first, dt, int(used), *point, d_point,
+                                   a.compact.d_sigma + c);
+    for (uint32_t j = 0; j < used; ++j) {
+        a.compact.pos[c + j] = a.samples.pos[first + j];
+        a.compact.ray[c + j] = r;
+    }
+}
+
+__device__ __forceinline__ void add_counters(const CompositeLossArgs& a, double loss, double se, double smooth) {
+    loss = warp_sum(loss);
+    se = warp_sum(se);
+    smooth = warp_sum(smooth);
+    if ((threadIdx.x & 31) == 0 && (loss != 0.0 || se != 0.0 || smooth != 0.0)) {
+        atomicAdd(&a.counters->loss, loss);
+        atomicAdd(&a.counters->squared_error, se);
+        if (smooth != 0.0) atomicAdd(&a.counters->smoothness, smooth);
+    }
+}
+
 __global__ void __launch_bounds__(k_block) composite_loss_kernel(CompositeLossArgs a) {
     const uint32_t r = blockIdx.x * blockDim.x + threadIdx.x;
     double loss = 0.0, se = 0.0;
-    if (r < a.n_rays && a.rays.count[r] != k_ray_dropped) {
-        const uint32_t first = a.rays.first[r];
-        const int n = int(a.rays.count[r]);
-        const Rgb bg = a.rays.background[r];
-        const Rgb target = a.rays.target[r];
-        const float* dt = a.samples.dt + first;
-        const CompositeResult fwd =
-            composite_forward(a.sigma + first, a.rgb + first, dt, n, a.min_transmittance, bg);
-        Rgb grad;
-        for (int k = 0; k < 3; ++k) {
-            const float diff = fwd.color[k] - target[k];
-            loss += huber_loss(diff, a.huber_delta, &grad[k]);
-            se += double(diff) * diff;
-        }
-        const uint32_t used = uint32_t(fwd.used);
-        if (used > 0) {
-            const uint32_t c = atomicAdd(&a.counters->compacted, used);
-            if (uint64_t(c) + used <= a.compact.capacity) {
-                // The gradient of this ray's loss (not yet divided by the number of rays: the MLP kernel does).
-                composite_backward(a.sigma + first, a.rgb + first, dt, int(used), fwd, bg, grad,
-                                   a.compact.d_sigma + c, a.compact.d_rgb + c);
-                for (uint32_t j = 0; j < used; ++j) {
-                    a.compact.pos[c + j] = a.samples.pos[first + j];
-                    a.compact.ray[c + j] = r;
-                }
-            }
+    CompositeResult fwd;
+    Rgb grad;
+    if (ray_forward(a, r, &fwd, &grad, &loss, &se)) ray_backward(a, r, fwd, grad, nullptr, Vec3(0.0f));
+    add_counters(a, loss, se, 0.0);
+}
+
+// With the smoothness loss: a thread per group of rays (train_pixel.h); the term where all three were kept.
+__global__ void __launch_bounds__(k_block) composite_group_loss_kernel(CompositeLossArgs a) {
+    const uint32_t g = blockIdx.x * blockDim.x + threadIdx.x;
+    double loss = 0.0, se = 0.0, smooth = 0.0;
+    CompositeResult fwd[k_smoothness_group];
+    Rgb grad[k_smoothness_group];
+    SurfacePoint points[k_smoothness_group];
+    bool kept[k_smoothness_group];
+    bool whole = true;
+    for (uint32_t k = 0; k < k_smoothness_group; ++k) {
+        const uint32_t r = g * k_smoothness_group + k;
+        kept[k] = ray_forward(a, r, &fwd[k], &grad[k], &loss, &se);
+        whole = whole && kept[k];
+        if (kept[k]) {
+            const uint32_t first = a.rays.first[r];
+            points[k] = surface_point(a.sigma + first, a.samples.pos + first, a.samples.dt + first, fwd[k].used);
         }
     }
-    loss = warp_sum(loss);
-    se = warp_sum(se);
-    if ((threadIdx.x & 31) == 0 && (loss != 0.0 || se != 0.0)) {
-        atomicAdd(&a.counters->loss, loss);
-        atomicAdd(&a.counters->squared_error, se);
-    }
+    SmoothnessTerm term;
+    if (whole) term = smoothness_term(points, a.smoothness_weight, a.smoothness_scale);
+    if (term.active) smooth = term.loss;
+    for (uint32_t k = 0; k < k_smoothness_group; ++k)
+        if (kept[k])
+            ray_backward(a, g * k_smoothness_group + k, fwd[k], grad[k], term.active ? &points[k] : nullptr,
+                         term.d_point[k]);
+    add_counters(a, loss, se, smooth);
 }
 
 int blocks_for(uint32_t n) { return int((n + k_block - 1) / k_block); }
@@ -261,6 +302,12 @@ void march_training_rays(const MarchRaysArgs& a, cudaStream_t s) {
 
 void composite_loss(const CompositeLossArgs& a, cudaStream_t s) {
     if (a.n_rays == 0) return;
+    if (a.smoothness_weight > 0.0f) {
+        const uint32_t groups = (a.n_rays + k_smoothness_group - 1) / k_smoothness_group;
+        composite_group_loss_kernel<<<blocks_for(groups), k_block, 0, s>>>(a);
+        NPT_CUDA_CHECK_LAUNCH("composite_group_loss_kernel");
+        return;
+    }
     composite_loss_kernel<<<blocks_for(a.n_rays), k_block, 0, s>>>(a);
     NPT_CUDA_CHECK_LAUNCH("composite_loss_kernel");
 }

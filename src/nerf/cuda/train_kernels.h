@@ -3,7 +3,7 @@
 // then, once the field has been evaluated, composite every ray, take the Huber loss and its gradient with
 // respect to each sample's density and colour (composite.h, the CPU trainer's code), and compact the samples
 // that contributed (those before the ray's early stop) for the training pass. The random numbers are the CPU
-// trainer's: ray r of step s draws from Pcg32(seed(s), r) in the same order.
+// trainer's (train_pixel.h). With the surface-smoothness loss a thread composites a group of three rays.
 #pragma once
 
 #include <cuda_runtime.h>
@@ -34,6 +34,7 @@ struct StepCounters {
     uint32_t nonfinite = 0;  // set by Adam when a gradient is not finite
     double loss = 0;         // sum over kept rays of the Huber loss (summed over channels)
     double squared_error = 0;
+    double smoothness = 0;   // sum over groups of the surface-smoothness loss
 };
 
 struct RayBuffers {
@@ -69,6 +70,7 @@ struct MarchRaysArgs {
     OccupancyGridView grid;
     uint64_t step_seed = 0;
     bool random_background = true;
+    float group_spacing = 0.0f;  // > 0: rays in groups for the smoothness loss (train_pixel.h)
     uint32_t n_rays = 0;
     RayBuffers rays;
     SampleBuffers samples;
@@ -86,6 +88,8 @@ struct CompositeLossArgs {
     const Rgb* rgb = nullptr;
     float min_transmittance = 1e-4f;
     float huber_delta = 1.0f;
+    float smoothness_weight = 0.0f;  // > 0: the surface-smoothness loss (surface_smoothness.h), rays in groups
+    float smoothness_scale = 0.2f;
     CompactBuffers compact;
     StepCounters* counters = nullptr;
 };
