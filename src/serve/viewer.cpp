@@ -21,6 +21,9 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
+// Longer than the gap between a dragging page's camera messages (about 16 ms at 60 Hz) plus the network.
+constexpr auto k_gpu_refine_hold = std::chrono::milliseconds(30);
+
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // The camera a CameraView describes (the default view of a scene without cameras).
@@ -145,9 +148,16 @@ void Viewer::run() {
         std::deque<Pending> batch;
         {
             std::unique_lock lock(m_mutex);
-            m_wake.wait(lock, [&] {
-                return m_stop || !m_queue.empty() || (!failed && (m_dirty || m_film.passes() < m_target_spp));
-            });
+            for (;;) {
+                if (m_stop || !m_queue.empty() || (!failed && m_dirty)) break;
+                if (failed || m_film.passes() >= m_target_spp) {
+                    m_wake.wait(lock);
+                } else if (Clock::now() < m_refine_after) {
+                    m_wake.wait_until(lock, m_refine_after);
+                } else {
+                    break;
+                }
+            }
             if (m_stop) return;
             batch.swap(m_queue);
             m_interrupt = false;
@@ -169,6 +179,7 @@ void Viewer::run() {
             if (m_dirty) {
                 m_dirty = false;
                 render_preview();
+                if (m_options.backend != "cpu") m_refine_after = Clock::now() + k_gpu_refine_hold;
             } else if (m_film.passes() < m_target_spp) {
                 render_pass();
             }

@@ -111,6 +111,9 @@ class Viewer final : public PageHandler {
     std::chrono::steady_clock::time_point m_change_received;  // when the oldest unserved change arrived
     bool m_change_pending_latency = false;
     std::chrono::steady_clock::time_point m_last_send;
+    // A GPU pass cannot be cancelled: after a preview the first full pass waits this long for the next move, so
+    // that a drag's frames are previews, not a pass and then a preview.
+    std::chrono::steady_clock::time_point m_refine_after;
     uint64_t m_seq = 0;
 
     mutable std::mutex m_mutex;
