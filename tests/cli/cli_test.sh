@@ -282,6 +282,11 @@ expect_error 2 "--exposure.*'nan' is not a finite number" render "$scene" -o "$t
 expect_error 2 "--seed.*'-1' is not a whole number >= 0" render "$scene" -o "$tmp/a.exr" --seed -1
 expect_error 2 "--spp.*'010'" render "$scene" -o "$tmp/a.exr" --spp 010
 expect_error 2 "--time.*'nan'" train "$tmp" -o "$tmp/nan.npt" --time nan
+expect_error 2 "--surface-smoothness.*-1" train "$tmp" -o "$tmp/nan.npt" --surface-smoothness -1
+# A resumed model keeps its config: the loss weight cannot change under it.
+printf 'x' >"$tmp/kept.npt"
+expect_error 1 "--surface-smoothness: a resumed model keeps the config" train "$tmp" -o "$tmp/kept.npt" --resume \
+    --surface-smoothness 0.1
 expect_error 2 "--fov.*'nan'" view "$tmp/bad.npt" -o "$tmp/a.png" --fov nan
 expect_error 2 "--distance.*inf" view "$tmp/bad.npt" -o "$tmp/a.png" --distance inf
 [[ ! -e "$tmp/nan.npt" ]] || fail "train --time nan wrote a model"
