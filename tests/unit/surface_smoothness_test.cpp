@@ -163,28 +163,29 @@ TEST(SurfaceSmoothness, GroupedDrawsShareAnImageAndLieOnALine) {
 }
 
 TEST(SurfaceSmoothness, TrainerLearnsWithItAndIsDeterministic) {
-    const Dataset train = test::make_sphere_scene({.views = 8, .size = 24, .view_seed = 5});
+    const Dataset train = test::make_sphere_scene({.views = 6, .size = 24, .view_seed = 5});
     auto run = [&](int threads, double* smoothness, double* first_loss, double* last_loss) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
         NerfConfig cfg = test::small_sphere_config();
         cfg.loss.surface_smoothness = 0.1f;
         NerfModel m = create_model(cfg, train.aabb_scale, ngp_world_to_model(train.scale, train.offset));
         Trainer t(m, train);
-        for (int i = 0; i < 120; ++i) {
+        for (int i = 0; i < 80; ++i) {
             const StepStats s = t.step();
             EXPECT_TRUE(std::isfinite(s.loss) && std::isfinite(s.smoothness));
             EXPECT_EQ(s.rays % 3, 0u);
             if (i == 0) *first_loss = s.loss;
             *last_loss = s.loss;
-            *smoothness = s.smoothness;
+            *smoothness += s.smoothness;
         }
         t.sync_model();
         return m;
     };
-    double smooth_a, smooth_b, first, last, unused;
+    double smooth_a = 0, smooth_b = 0, first, last, unused;
     const NerfModel a = run(1, &smooth_a, &first, &last), b = run(2, &smooth_b, &unused, &unused);
-    std::printf("loss %.4f -> %.4f, smoothness %.2e\n", first, last, smooth_a);
+    std::printf("loss %.4f -> %.4f, smoothness summed over the steps %.2e\n", first, last, smooth_a);
     EXPECT_LT(last, 0.5 * first);
+    EXPECT_GT(smooth_a, 0.0);  // groups on the spheres' surfaces did contribute
     ASSERT_EQ(a.params.size(), b.params.size());
     size_t diff = 0;
     for (size_t i = 0; i < a.params.size(); ++i) diff += a.params[i] != b.params[i];
