@@ -9,6 +9,10 @@
 # depth, at a few steps / stencil widths) on the trained NeRF. VARIANTS="name:ARGS;name:ARGS" re-runs the relight
 # stage alone on copies of the trained model with extra `nerfpt train` ARGS (e.g. --relight-normals density) and
 # scores each one's fields (at VARIANT_SPP, default 4). TRAIN_ARGS are added to the first training's arguments.
+# Carry limit (64 MiB with the working tree, counted in disk blocks): the bundle of nerfpt and relight_fields
+# (~25 MB) and all of .gpu/relight (~31 MB) do not fit together. Without RELIT=1, .gpu/relight/dev's relit/,
+# scene/ and lights/ are not read; with RELIT=1, bundle nerfpt alone (relight_fields is then missing, and only
+# the render's AOVs are scored).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_out}
