@@ -21,10 +21,12 @@ namespace npt::nerf {
 
 constexpr float k_min_smoothness_alpha = 0.5f;
 
-// Over a ray's samples before its stop: sum w_i p_i and sum w_i = 1 - T_end (the forward's weights).
+// Over a ray's samples before its stop: sum w_i p_i, sum w_i = 1 - T_end (the forward's weights), and the
+// optical depth they add up to (kept for the backward pass, which walks back from T_end).
 struct SurfacePoint {
     Vec3 weighted_sum{0.0f, 0.0f, 0.0f};
     float alpha = 0.0f;
+    float optical_depth = 0.0f;
     NPT_HD Vec3 point() const { return weighted_sum * (1.0f / alpha); }
 };
 
@@ -37,6 +39,7 @@ NPT_HD inline SurfacePoint surface_point(const float* sigma, const Vec3* pos, co
         tau += depth;
     }
     s.alpha = -expm1f(-tau);
+    s.optical_depth = tau;
     return s;
 }
 
@@ -81,8 +84,7 @@ NPT_HD inline SmoothnessTerm smoothness_term(const SurfacePoint* s, float weight
 NPT_HD inline void surface_point_backward_add(const float* sigma, const Vec3* pos, const float* dt, int used,
                                               const SurfacePoint& s, Vec3 d_point, float* d_sigma) {
     if (!(s.alpha > 0.0f)) return;
-    float tau = 0.0f;
-    for (int i = 0; i < used; ++i) tau += sigma[i] * dt[i];
+    float tau = s.optical_depth;
     const float t_end = expf(-tau);
     const float inv_a = 1.0f / s.alpha;
     const float g_point_t_end = dot(d_point, s.point()) * t_end;

@@ -45,7 +45,7 @@ NPT_HD NPT_INLINE TrainPixel draw_train_pixel(uint64_t step_seed, uint32_t ray, 
     t.jitter = rng.next_float();
     if (grouped) {
         const float angle = rng.next_float() * 3.14159265f;
-        const float spacing = 1.0f + rng.next_float() * (max_spacing - 1.0f > 0.0f ? max_spacing - 1.0f : 0.0f);
+        const float spacing = 1.0f + rng.next_float() * fmaxf(max_spacing - 1.0f, 0.0f);
         const float dx = cosf(angle) * spacing, dy = sinf(angle) * spacing;
         // The centre moved so that the three pixels lie inside the image (when it is wide enough).
         const float mx = fabsf(dx), my = fabsf(dy);

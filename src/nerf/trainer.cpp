@@ -232,26 +232,19 @@ StepStats Trainer::compute_gradient() try {
     if (!grouped) {
         tbb::parallel_for(size_t(0), n_kept, [&](size_t r) { composite_ray(r); });
     } else {
-        // A group's smoothness term only where all three of its rays were kept.
-        const size_t groups = (n_kept + k_smoothness_group - 1) / k_smoothness_group;
+        // n_kept is whole groups (above).
+        const size_t groups = n_kept / k_smoothness_group;
         group_smoothness.assign(groups, 0.0);
         tbb::parallel_for(size_t(0), groups, [&](size_t g) {
             const size_t r0 = g * k_smoothness_group;
             SurfacePoint points[k_smoothness_group];
             int used[k_smoothness_group] = {};
-            bool whole = true;
             for (uint32_t k = 0; k < k_smoothness_group; ++k) {
-                const size_t r = r0 + k;
-                if (r >= n_kept) {
-                    whole = false;
-                    continue;
-                }
-                const CompositeResult fwd = composite_ray(r);
-                const TrainRay& tr = rays[r];
+                const CompositeResult fwd = composite_ray(r0 + k);
+                const TrainRay& tr = rays[r0 + k];
                 used[k] = fwd.used;
                 points[k] = surface_point(&sigma[tr.first], &positions[tr.first], &dts[tr.first], used[k]);
             }
-            if (!whole) return;
             const SmoothnessTerm term =
                 smoothness_term(points, cfg.loss.surface_smoothness, cfg.loss.smoothness_scale);
             if (!term.active) return;
