@@ -44,6 +44,10 @@ if [[ "${1:-}" == "--sanitize" ]]; then
         # RelightTrainer.PrefilteredSpecular... (215 s: 3000 fit steps and a fine quadrature in the test):
         # PrefilteredGradientMatchesFiniteDifferences... runs the same estimator, forward and backward.
         slow+='|BakeColour\.|RelightTrainer\.PrefilteredSpecularRecoversAGlossyAlbedo'
+        # RelightTrainer.RecoversAKnownAlbedo... (46 s: 1500 fit steps): GradientMatchesFiniteDifferences... runs
+        # the sampled estimator's forward and backward. PathIntegrator.WhiteFurnaceGgxConductor (55 s): the
+        # integrator runs in WhiteFurnaceLambert, the conductor BSDF in Conductor.WhiteFurnace... .
+        slow+='|RelightTrainer\.RecoversAKnownAlbedo|PathIntegrator\.WhiteFurnaceGgxConductor'
         (cd build-san && ctest -L unit -E "$slow" --output-on-failure -j "$jobs" "$@")
     else
         cmake --build build-san -j "$jobs" --target nerfpt_unit_tests nerfpt_cli fuzzers
