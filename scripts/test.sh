@@ -63,5 +63,5 @@ scripts/configure.sh
 cmake --build build -j "$jobs"
 
 cd build
-# `long`: end-to-end tests of many CPU minutes (tests/e2e_long), run by hand (ctest -L long), not in CI's 30.
+# `long`: end-to-end tests of many CPU minutes (tests/e2e_long), run by hand (ctest -L long), not in CI's 40.
 ctest -LE 'gpu|long' --output-on-failure -j "$jobs" "$@"
