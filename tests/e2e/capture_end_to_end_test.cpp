@@ -1,23 +1,49 @@
 // The whole capture pipeline against ground truth: a turntable video rendered by our path tracer with known
 // poses goes through `nerfpt capture` (ffmpeg decode, curate, COLMAP, transforms.json, split, a short
-// training, eval, turntable), and the poses in transforms.json are compared with the truth after a similarity
-// alignment. Needs ffmpeg and colmap on PATH (scripts/install_deps.sh installs them); skips without them.
+// training, eval, turntable; the first run with --serve, watched by a WebSocket page), and the poses in
+// transforms.json are compared with the truth after a similarity alignment. Needs ffmpeg and colmap on PATH
+// (scripts/install_deps.sh installs them); skips without them.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/wait.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <regex>
+#include <set>
+#include <thread>
 
 #include "capture/pose_alignment.h"
 #include "core/executable.h"
 #include "core/json_file.h"
 #include "nerf/model_file.h"
+#include "serve_test_client.h"
 #include "test_support.h"
 #include "turntable_scene.h"
 
 namespace npt::test {
 namespace {
 namespace fs = std::filesystem;
+
+// The port of a spawned `nerfpt ... --serve --port 0` from the URL it prints, or 0 when the process exits or
+// prints none within a minute.
+int wait_for_serve_port(int pid, const fs::path& log) {
+    const std::regex url(R"(page at http://127\.0\.0\.1:([0-9]+)/)");
+    for (int i = 0; i < 600; ++i) {
+        std::smatch m;
+        const std::string text = read_text(log);
+        if (std::regex_search(text, m, url)) return std::stoi(m[1].str());
+        int status = 0;
+        if (waitpid(pid_t(pid), &status, WNOHANG) == pid) return 0;
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    kill(pid, SIGKILL);
+    wait_exit(pid);
+    return 0;
+}
 
 TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     for (const char* tool : {"ffmpeg", "colmap"})
@@ -53,8 +79,37 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
                                               "24",
                                               "--config",
                                               (dir / "small.json").string()};
-    const int rc = run_cli(capture, dir / "capture.log");
-    ASSERT_EQ(rc, 0) << read_text(dir / "capture.log");
+    // The first run serves its page (--serve): a page connected while it runs sees the long stages running,
+    // the training's status, and at the end every stage done; then the page stays up until Ctrl-C.
+    std::vector<std::string> served = capture;
+    for (const char* a : {"--serve", "--port", "0"}) served.push_back(a);
+    const int pid = spawn_cli(served, dir / "capture.log");
+    const int port = wait_for_serve_port(pid, dir / "capture.log");
+    ASSERT_GT(port, 0) << read_text(dir / "capture.log");
+    {
+        ServeClient page(uint16_t(port), "");
+        std::set<std::string> seen_running;
+        nlohmann::json last_train = nlohmann::json::object(), last_state = nlohmann::json::object();
+        for (int i = 0; i < 100000 && last_state.value("phase", "") != "capture finished"; ++i) {
+            const nlohmann::json m = page.next();
+            if (m["type"] == "train") last_train = m;
+            if (m["type"] != "state") continue;
+            last_state = m;
+            for (const nlohmann::json& st : m["stages"])
+                if (st["state"] == "running") seen_running.insert(st["name"].get<std::string>());
+        }
+        ASSERT_EQ(last_state.value("phase", ""), "capture finished") << read_text(dir / "capture.log");
+        EXPECT_TRUE(seen_running.count("poses") && seen_running.count("train"))
+            << "stages seen running: " << nlohmann::json(seen_running).dump();
+        ASSERT_EQ(last_state["stages"].size(), 7u);
+        for (const nlohmann::json& st : last_state["stages"]) EXPECT_EQ(st["state"], "done") << st.dump();
+        EXPECT_EQ(last_train.value("step", 0), 20) << last_train.dump();
+        EXPECT_TRUE(last_train.value("finished", false)) << last_train.dump();
+    }
+    kill(pid, SIGINT);
+    EXPECT_EQ(wait_exit(pid), 128 + SIGINT);  // the page served until Ctrl-C; everything was written before
+    const std::string served_log = read_text(dir / "capture.log");
+    EXPECT_NE(served_log.find("stays up until Ctrl-C"), std::string::npos) << served_log;
 
     const nlohmann::json record = read_json_file(work / "capture.json");
     const nlohmann::json& stages = record.at("stages");
