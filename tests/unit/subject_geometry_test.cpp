@@ -207,7 +207,8 @@ TEST(SubjectGeometry, ADenseFieldGivesTheWholeObjectAndNotItsNeighbours) {
         if (std::hypot(m.x() - 0.3, m.y()) < 0.05 && q.z() < 0.1) return 1.0;  // a prop 30 cm away
         return 0.0;
     };
-    const DenseBox d = refine_box_with_field(g, 0.004 * units, opacity);
+    // 8 mm cells: 0.9 M of them (4 mm took 100 s under ASan for 7 M); the bounds below hold for either.
+    const DenseBox d = refine_box_with_field(g, 0.008 * units, opacity);
     ASSERT_TRUE(d.found);
     EXPECT_NEAR(d.geometry.height, c.truth.height, 0.03 * c.truth.height);
     // The box: the object's 12 cm diameter plus a cell or two each side, not the prop's 30 cm away.
@@ -218,7 +219,7 @@ TEST(SubjectGeometry, ADenseFieldGivesTheWholeObjectAndNotItsNeighbours) {
     EXPECT_LT((off - off.dot(g.up) * g.up).norm(), 0.005 * units);
     EXPECT_DOUBLE_EQ(d.geometry.box_min.z(), 0.0);
     // An empty field finds nothing and leaves the geometry as it was.
-    const DenseBox none = refine_box_with_field(g, 0.004 * units, [](const Vector3d&) { return 0.0; });
+    const DenseBox none = refine_box_with_field(g, 0.008 * units, [](const Vector3d&) { return 0.0; });
     EXPECT_FALSE(none.found);
     EXPECT_EQ(none.geometry.height, g.height);
 }
