@@ -98,10 +98,11 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
             for (const nlohmann::json& st : m["stages"])
                 if (st["state"] == "running") seen_running.insert(st["name"].get<std::string>());
         }
-        ASSERT_EQ(last_state.value("phase", ""), "capture finished") << read_text(dir / "capture.log");
+        // EXPECT, not ASSERT, in this block: an early return would leave the served process running.
+        EXPECT_EQ(last_state.value("phase", ""), "capture finished") << read_text(dir / "capture.log");
         EXPECT_TRUE(seen_running.count("poses") && seen_running.count("train"))
             << "stages seen running: " << nlohmann::json(seen_running).dump();
-        ASSERT_EQ(last_state["stages"].size(), 7u);
+        EXPECT_EQ(last_state["stages"].size(), 7u);
         for (const nlohmann::json& st : last_state["stages"]) EXPECT_EQ(st["state"], "done") << st.dump();
         EXPECT_EQ(last_train.value("step", 0), 20) << last_train.dump();
         EXPECT_TRUE(last_train.value("finished", false)) << last_train.dump();
