@@ -42,7 +42,8 @@ bundle)
         strip -o ".gpu/stage/bin/$name" "$file"
     done
     stage_libs
-    tar -cJf .gpu/bundle.tar.xz -C .gpu/stage bin lib
+    # xz -9e: ~15% smaller than tar -J, which is what lets the tests and the data fit in one 64 MiB carry
+    tar -cf - -C .gpu/stage bin lib | xz -9e -T0 >.gpu/bundle.tar.xz
     rm -rf .gpu/stage
     du -h .gpu/bundle.tar.xz
     ;;
@@ -55,7 +56,8 @@ pack)
     cp "$build/tests/nerfpt_gpu_tests" "$build/nerfpt" "$build/bench/train_bench" "$build/bench/view_bench" \
         "$build/bench/render_bench" "$build/bench/relight_fields" .gpu/stage/bin/
     stage_libs
-    tar -cJf .gpu/bundle.tar.xz -C .gpu/stage bin lib
+    # xz -9e: ~15% smaller than tar -J, which is what lets the tests and the data fit in one 64 MiB carry
+    tar -cf - -C .gpu/stage bin lib | xz -9e -T0 >.gpu/bundle.tar.xz
     rm -rf .gpu/stage
     # The lego views the benchmarks read: the training set and test views 0, 4, 8, ... (train_bench
     # --test-every 4 on the full set scores the same 50 views as --test-every 1 on this one).
