@@ -1,7 +1,8 @@
 # NERFPT_SANITIZE: AddressSanitizer + UndefinedBehaviorSanitizer on every C++ file we compile (the library,
-# the CLI, the tests), any UB report fatal. NERFPT_FUZZ adds libFuzzer's coverage instrumentation (clang only);
-# fuzz/CMakeLists.txt links the harnesses with -fsanitize=fuzzer. Third-party libraries stay uninstrumented:
-# ASan still catches their heap errors through its allocator.
+# the CLI, the tests), any UB report fatal. NERFPT_FUZZ (clang only) builds the libFuzzer harnesses
+# (fuzz/CMakeLists.txt links them with -fsanitize=fuzzer); nerfpt_fuzz_coverage() below gives the code they
+# parse through libFuzzer's coverage instrumentation. Third-party libraries stay uninstrumented: ASan still
+# catches their heap errors through its allocator.
 if(NERFPT_FUZZ)
     if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
         message(FATAL_ERROR "NERFPT_FUZZ needs clang (libFuzzer): configure with -DCMAKE_CXX_COMPILER=clang++")
@@ -14,9 +15,6 @@ if(NERFPT_SANITIZE)
         # Third-party headers' own UB (TBB's tagged pointers): not ours to fix; see the file.
         list(APPEND _nerfpt_san -fsanitize-ignorelist=${PROJECT_SOURCE_DIR}/cmake/sanitizer_ignorelist.txt)
     endif()
-    if(NERFPT_FUZZ)
-        list(APPEND _nerfpt_san -fsanitize=fuzzer-no-link)
-    endif()
     add_compile_options("$<$<COMPILE_LANGUAGE:CXX>:${_nerfpt_san}>")
     add_link_options(-fsanitize=address,undefined)
 endif()
@@ -26,5 +24,15 @@ endif()
 function(nerfpt_conforming_new target)
     if(NERFPT_SANITIZE)
         target_sources(${target} PRIVATE ${PROJECT_SOURCE_DIR}/cmake/sanitizer_new.cpp)
+    endif()
+endfunction()
+
+# libFuzzer's coverage (edge counters and a callback on every comparison) on the given sources, when NERFPT_FUZZ is
+# on: the code that reads untrusted bytes, which is what guides the harnesses to new inputs. Only there: on the
+# whole library it was 26% of the sanitizer build's compile time, and the comparison callbacks slowed the
+# sanitizer build's training and rendering tests, which no harness reaches.
+function(nerfpt_fuzz_coverage)
+    if(NERFPT_FUZZ)
+        set_property(SOURCE ${ARGN} APPEND PROPERTY COMPILE_OPTIONS -fsanitize=fuzzer-no-link)
     endif()
 endfunction()

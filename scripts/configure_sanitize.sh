@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Configures the ASan + UBSan build in build-san/ (or $NERFPT_SAN_BUILD): clang, libFuzzer coverage on, the
-# library, the CLI, the unit tests and the fuzz harnesses (fuzz/), no CUDA, no benchmarks. -O1 -g with
-# assertions on (our debug-only checks, nlohmann's JSON_ASSERT). Used by scripts/test.sh --sanitize and
-# scripts/fuzz.sh; extra arguments go to cmake.
+# Configures the ASan + UBSan build in build-san/ (or $NERFPT_SAN_BUILD): clang; the library, the CLI, the unit
+# tests and the fuzz harnesses (fuzz/), libFuzzer coverage on the parsing code (cmake/NerfptSanitizers.cmake);
+# no CUDA, no benchmarks. -O1 -g with assertions on (our debug-only checks, nlohmann's JSON_ASSERT). Used by
+# scripts/test.sh --sanitize and scripts/fuzz.sh; extra arguments go to cmake.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
