@@ -28,9 +28,9 @@ function(nerfpt_conforming_new target)
 endfunction()
 
 # libFuzzer's coverage (edge counters and a callback on every comparison) on the given sources, when NERFPT_FUZZ is
-# on: the code that reads untrusted bytes, which is what guides the harnesses to new inputs. Only there: on the
-# whole library it was 26% of the sanitizer build's compile time, and the comparison callbacks slowed the
-# sanitizer build's training and rendering tests, which no harness reaches.
+# on: the code that reads untrusted bytes, which is what guides the harnesses to new inputs. Only there: elsewhere
+# it made a file's sanitizer compile 10-17% slower and the training tests under ASan 2x slower, and no harness
+# reaches that code (docs/benchmarks.md, "CI time").
 function(nerfpt_fuzz_coverage)
     if(NERFPT_FUZZ)
         set_property(SOURCE ${ARGN} APPEND PROPERTY COMPILE_OPTIONS -fsanitize=fuzzer-no-link)

@@ -32,6 +32,12 @@ stage_libs() {  # every library ldd resolves outside the C runtime (the GPU mach
         grep -v -E '/(libc|libm|libdl|libpthread|librt|libgcc_s|libstdc\+\+|ld-linux[^/]*|libcuda)\.so' |
         xargs -r -I{} cp -L {} .gpu/stage/lib/
 }
+write_bundle() {  # .gpu/stage/bin with its libraries -> .gpu/bundle.tar.xz
+    stage_libs
+    # xz -9e: ~15% smaller than tar -J, which is what lets the tests and the data fit in one 64 MiB carry
+    tar -cf - -C .gpu/stage bin lib | xz -9e -T0 >.gpu/bundle.tar.xz
+    rm -rf .gpu/stage
+}
 case "$mode" in
 bundle)
     build=${BUILD_DIR:-build}
@@ -41,10 +47,7 @@ bundle)
         [[ -n $file ]] || { echo "gpu_check: no binary '$name' under $build (build it first)" >&2; exit 1; }
         strip -o ".gpu/stage/bin/$name" "$file"
     done
-    stage_libs
-    # xz -9e: ~15% smaller than tar -J, which is what lets the tests and the data fit in one 64 MiB carry
-    tar -cf - -C .gpu/stage bin lib | xz -9e -T0 >.gpu/bundle.tar.xz
-    rm -rf .gpu/stage
+    write_bundle
     du -h .gpu/bundle.tar.xz
     ;;
 pack)
@@ -55,10 +58,7 @@ pack)
     rm -rf .gpu/stage && mkdir -p .gpu/stage/bin .gpu/stage/lib
     cp "$build/tests/nerfpt_gpu_tests" "$build/nerfpt" "$build/bench/train_bench" "$build/bench/view_bench" \
         "$build/bench/render_bench" "$build/bench/relight_fields" .gpu/stage/bin/
-    stage_libs
-    # xz -9e: ~15% smaller than tar -J, which is what lets the tests and the data fit in one 64 MiB carry
-    tar -cf - -C .gpu/stage bin lib | xz -9e -T0 >.gpu/bundle.tar.xz
-    rm -rf .gpu/stage
+    write_bundle
     # The lego views the benchmarks read: the training set and test views 0, 4, 8, ... (train_bench
     # --test-every 4 on the full set scores the same 50 views as --test-every 1 on this one).
     # The reference scenes the OptiX parity tests and render_bench use (a few MB).
