@@ -301,7 +301,7 @@ ws.onmessage = async (ev) => {
     bitmap.close();
     test.frames++;
     test.header = header;
-    // Another page (or a jump to a scene camera) moved the view: follow it unless this page is moving.
+    // A jump to a scene camera (camera_from 0) moved this page's view: follow it unless this page is moving.
     const idle = performance.now() - lastCameraSent > 1000 && !gizmo.dragging && keys.size === 0;
     if (header.camera_from === 0 || idle) {
       const c = header.camera, p = camera.position;

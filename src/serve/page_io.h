@@ -16,6 +16,8 @@ class ViewerSink {
     virtual ~ViewerSink() = default;
     // A binary frame for every client: [u32 little-endian n][n bytes of JSON header][JPEG].
     virtual void broadcast_frame(std::shared_ptr<const std::string> frame) = 0;
+    // The same for one client: a page's own view. Only the newest frame waits for a slow page.
+    virtual void send_frame(uint64_t client, std::shared_ptr<const std::string> frame) = 0;
     // A JSON text message for one client (`client` != 0) or every client (0).
     virtual void send_text(uint64_t client, std::shared_ptr<const std::string> text) = 0;
 };
@@ -28,6 +30,10 @@ class PageHandler {
     virtual std::shared_ptr<const std::string> state() const = 0;
     // A parsed message from page `client`, queued for the worker.
     virtual void post(uint64_t client, ClientMessage message) = 0;
+    // A page connected (before any of its messages) or closed (after its last): a handler that keeps a view
+    // per page makes or frees it.
+    virtual void page_opened(uint64_t client) { (void)client; }
+    virtual void page_closed(uint64_t client) { (void)client; }
 };
 
 }  // namespace npt::serve

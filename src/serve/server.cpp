@@ -141,7 +141,10 @@ struct Server::Impl {
                 self->open = true;
                 self->server.sessions[self->id] = self;
                 spdlog::info("serve: page {} connected ({} open)", self->id, self->server.session_count.load());
-                if (self->server.viewer) self->queue_text(self->server.viewer->state());
+                if (self->server.viewer) {
+                    self->server.viewer->page_opened(self->id);
+                    self->queue_text(self->server.viewer->state());
+                }
                 self->read();
             });
         }
@@ -182,6 +185,7 @@ struct Server::Impl {
             server.sessions.erase(id);
             texts.clear();
             frame.reset();
+            if (server.viewer) server.viewer->page_closed(id);
             spdlog::info("serve: page {} closed", id);
         }
         void queue_text(std::shared_ptr<const std::string> t) {
@@ -371,6 +375,14 @@ void Server::broadcast_frame(std::shared_ptr<const std::string> frame) {
     asio::post(m->ioc, [impl = m.get(), frame] {
         for (auto& [id, w] : impl->sessions)
             if (auto s = w.lock()) s->queue_frame(frame);
+    });
+}
+
+void Server::send_frame(uint64_t client, std::shared_ptr<const std::string> frame) {
+    asio::post(m->ioc, [impl = m.get(), client, frame] {
+        const auto it = impl->sessions.find(client);
+        if (it != impl->sessions.end())
+            if (auto s = it->second.lock()) s->queue_frame(frame);
     });
 }
 

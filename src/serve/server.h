@@ -47,6 +47,7 @@ class Server final : public ViewerSink {
     size_t sessions() const;
 
     void broadcast_frame(std::shared_ptr<const std::string> frame) override;
+    void send_frame(uint64_t client, std::shared_ptr<const std::string> frame) override;
     void send_text(uint64_t client, std::shared_ptr<const std::string> text) override;
 
   private:

@@ -17,12 +17,13 @@
 namespace npt::serve {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
-using Clock = std::chrono::steady_clock;
 
 namespace {
 
 // Longer than the gap between a dragging page's camera messages (about 16 ms at 60 Hz) plus the network.
 constexpr auto k_gpu_refine_hold = std::chrono::milliseconds(30);
+
+using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -57,10 +58,11 @@ Viewer::Viewer(const ViewerOptions& options, ViewerSink& sink)
     m_max_depth = resolved.max_depth;
     m_seed = s.settings.seed;
     m_divisor = options.preview_divisor > 0 ? options.preview_divisor : (options.backend == "cpu" ? 4 : 1);
-    // The viewer's own camera, appended after the file's: the one rendered, moved by the page.
+    // The viewer's own camera, appended after the file's: the one rendered, set to a page's camera before
+    // rendering for that page.
     m_file_cameras = s.cameras.size();
-    scene::Camera viewer = camera_from_view(render::make_camera_view(s, m_width, m_height));
-    s.cameras.push_back(viewer);
+    m_start_camera = camera_from_view(render::make_camera_view(s, m_width, m_height));
+    s.cameras.push_back(m_start_camera);
     s.camera = int(s.cameras.size()) - 1;
     m_volume_edited.assign(s.volumes.size(), false);
     for (const scene::PunctualLight& l : s.lights) m_light_base.push_back(l.intensity);
@@ -90,11 +92,14 @@ void Viewer::post(uint64_t client, ClientMessage message) {
         std::lock_guard lock(m_mutex);
         if (m_queue.size() >= k_max_queue) {
             // A page that sends faster than the worker reads: its oldest camera move is superseded anyway.
+            auto oldest_move = m_queue.end();
             for (auto it = m_queue.begin(); it != m_queue.end(); ++it)
-                if (std::holds_alternative<CameraMsg>(it->message)) {
-                    m_queue.erase(it);
-                    break;
+                if (std::holds_alternative<CameraMsg>(it->message) &&
+                    (oldest_move == m_queue.end() || it->client == client)) {
+                    oldest_move = it;
+                    if (it->client == client) break;
                 }
+            if (oldest_move != m_queue.end()) m_queue.erase(oldest_move);
             if (m_queue.size() >= k_max_queue) {
                 spdlog::warn("serve: client {}: message queue full, message dropped", client);
                 return;
@@ -102,6 +107,23 @@ void Viewer::post(uint64_t client, ClientMessage message) {
         }
         m_queue.push_back({client, std::move(message), Clock::now()});
         m_interrupt = true;
+    }
+    m_wake.notify_all();
+}
+
+void Viewer::page_opened(uint64_t client) {
+    {
+        std::lock_guard lock(m_mutex);
+        m_opened.push_back(client);
+    }
+    m_wake.notify_all();
+}
+
+void Viewer::page_closed(uint64_t client) {
+    {
+        std::lock_guard lock(m_mutex);
+        m_closed.push_back(client);
+        m_interrupt = true;  // a CPU pass for a closed page is not worth finishing
     }
     m_wake.notify_all();
 }
@@ -125,6 +147,7 @@ render::RenderOptions Viewer::options_for(int width, int height, int spp) const 
 }
 
 void Viewer::prepare() {
+    m_aimed_at = k_nobody;  // the new renderers hold the scene's viewer camera as it is
     m_full.reset();
     m_preview.reset();
     m_full = render::prepare_renderer(*m_scene, options_for(m_width, m_height, 1));
@@ -142,46 +165,113 @@ void Viewer::apply_pose_change(bool camera, bool lights, bool volumes) {
     if (m_preview) m_preview->update(c);
 }
 
+Viewer::PageView& Viewer::page(uint64_t client) {
+    auto [it, made] = m_pages.try_emplace(client);
+    if (made) it->second.camera = m_start_camera;
+    return it->second;
+}
+
+bool Viewer::has_work(Clock::time_point now, Clock::time_point* wake_at) const {
+    bool waiting = false;
+    for (const auto& [id, v] : m_pages) {
+        if (v.dirty) return true;
+        if (v.film.passes() >= m_target_spp) continue;
+        if (now >= v.refine_after) return true;
+        if (!waiting || v.refine_after < *wake_at) *wake_at = v.refine_after;
+        waiting = true;
+    }
+    if (!waiting) *wake_at = Clock::time_point::max();
+    return false;
+}
+
+Viewer::PageView* Viewer::next_page(uint64_t* client) {
+    if (m_pages.empty()) return nullptr;
+    // In turn from the page after the last one rendered for: previews first, then passes.
+    const auto now = Clock::now();
+    auto start = m_pages.upper_bound(m_last_rendered);
+    for (int want_preview = 1; want_preview >= 0; --want_preview) {
+        auto it = start;
+        for (size_t n = 0; n < m_pages.size(); ++n, ++it) {
+            if (it == m_pages.end()) it = m_pages.begin();
+            PageView& v = it->second;
+            const bool needs = want_preview ? v.dirty
+                                            : v.film.passes() < m_target_spp && now >= v.refine_after;
+            if (needs) {
+                *client = it->first;
+                return &v;
+            }
+        }
+    }
+    return nullptr;
+}
+
+void Viewer::aim_at(uint64_t client) {
+    if (m_aimed_at == client) return;
+    m_scene->cameras.back() = page(client).camera;
+    apply_pose_change(true, false, false);
+    m_aimed_at = client;
+}
+
 void Viewer::run() {
     bool failed = false;  // a render failed: wait for the next change instead of failing again at once
     for (;;) {
         std::deque<Pending> batch;
+        std::vector<uint64_t> opened, closed;
         {
             std::unique_lock lock(m_mutex);
             for (;;) {
-                if (m_stop || !m_queue.empty() || (!failed && m_dirty)) break;
-                if (failed || m_film.passes() >= m_target_spp) {
+                if (m_stop || !m_queue.empty() || !m_opened.empty() || !m_closed.empty()) break;
+                if (failed) {
                     m_wake.wait(lock);
-                } else if (Clock::now() < m_refine_after) {
-                    m_wake.wait_until(lock, m_refine_after);
-                } else {
-                    break;
+                    continue;
                 }
+                Clock::time_point wake_at;
+                if (has_work(Clock::now(), &wake_at)) break;
+                if (wake_at == Clock::time_point::max())
+                    m_wake.wait(lock);
+                else
+                    m_wake.wait_until(lock, wake_at);
             }
             if (m_stop) return;
             batch.swap(m_queue);
+            opened.swap(m_opened);
+            closed.swap(m_closed);
             m_interrupt = false;
         }
+        for (uint64_t id : opened) page(id);
         for (const Pending& p : batch) {
             try {
-                if (handle(p)) {
-                    if (!m_change_pending_latency) m_change_received = p.received;
-                    m_change_pending_latency = true;
-                    m_dirty = true;
-                    failed = false;
+                const Restart r = handle(p);
+                if (r == Restart::none) continue;
+                for (auto& [id, v] : m_pages) {
+                    if (r == Restart::page && id != p.client) continue;
+                    if (!v.latency_pending) v.change_received = p.received;
+                    v.latency_pending = true;
+                    v.dirty = true;
                 }
+                failed = false;
             } catch (const Error& e) {
                 spdlog::warn("serve: client {}: {}", p.client, e.what());
                 reply(p.client, "error", {{"message", e.what()}});
             }
         }
+        for (uint64_t id : closed) {
+            m_pages.erase(id);  // its film's memory with it
+            if (m_aimed_at == id) m_aimed_at = k_nobody;
+        }
+        if (failed) continue;
+        uint64_t id = 0;
+        PageView* v = next_page(&id);
+        if (!v) continue;
+        m_last_rendered = id;
         try {
-            if (m_dirty) {
-                m_dirty = false;
-                render_preview();
-                if (m_options.backend != "cpu") m_refine_after = Clock::now() + k_gpu_refine_hold;
-            } else if (m_film.passes() < m_target_spp) {
-                render_pass();
+            aim_at(id);
+            if (v->dirty) {
+                v->dirty = false;
+                render_preview(id, *v);
+                if (m_options.backend != "cpu") v->refine_after = Clock::now() + k_gpu_refine_hold;
+            } else {
+                render_pass(id, *v);
             }
         } catch (const Cancelled&) {
             // a message arrived: handled at the top of the loop
@@ -193,27 +283,28 @@ void Viewer::run() {
     }
 }
 
-bool Viewer::handle(const Pending& p) {
+Viewer::Restart Viewer::handle(const Pending& p) {
     scene::Scene& s = *m_scene;
     return std::visit(
-        [&](const auto& m) -> bool {
+        [&](const auto& m) -> Restart {
             using T = std::decay_t<decltype(m)>;
             if constexpr (std::is_same_v<T, CameraMsg>) {
-                s.cameras.back() = camera_from_message(m);
-                m_camera_from = p.client;
-                apply_pose_change(true, false, false);
-                return true;
+                PageView& v = page(p.client);
+                v.camera = camera_from_message(m);
+                v.camera_from = p.client;
+                if (m_aimed_at == p.client) m_aimed_at = k_nobody;
+                return Restart::page;
             } else if constexpr (std::is_same_v<T, UseCameraMsg>) {
                 if (size_t(m.index) >= m_file_cameras)
                     throw Error("use_camera.index: " + std::to_string(m.index) +
                                 " is not a scene camera (the scene has " + std::to_string(m_file_cameras) +
                                 ")");
-                scene::Camera c = s.cameras[size_t(m.index)];
-                c.name = "viewer";
-                s.cameras.back() = c;
-                m_camera_from = 0;  // every page moves its controls to it
-                apply_pose_change(true, false, false);
-                return true;
+                PageView& v = page(p.client);
+                v.camera = s.cameras[size_t(m.index)];
+                v.camera.name = "viewer";
+                v.camera_from = 0;  // the page moves its controls to it
+                if (m_aimed_at == p.client) m_aimed_at = k_nobody;
+                return Restart::page;
             } else if constexpr (std::is_same_v<T, VolumeMsg>) {
                 if (size_t(m.index) >= s.volumes.size())
                     throw Error("volume.index: " + std::to_string(m.index) +
@@ -246,7 +337,7 @@ bool Viewer::handle(const Pending& p) {
                     m_volume_edited[size_t(m.index)] = true;
                     publish_state();
                 }
-                return placed || filled;
+                return (placed || filled) ? Restart::all : Restart::none;
             } else if constexpr (std::is_same_v<T, LightMsg>) {
                 if (size_t(m.index) >= s.lights.size())
                     throw Error("light.index: " + std::to_string(m.index) +
@@ -257,7 +348,7 @@ bool Viewer::handle(const Pending& p) {
                     m_light_base[size_t(m.index)] * float(m.intensity_scale);
                 apply_pose_change(false, true, false);
                 publish_state();
-                return true;
+                return Restart::all;
             } else if constexpr (std::is_same_v<T, SettingsMsg>) {
                 bool restart = false;
                 if (m.spp) {
@@ -284,40 +375,42 @@ bool Viewer::handle(const Pending& p) {
                 }
                 if (m.exposure) {
                     m_exposure = *m.exposure;
-                    if (!restart && m_film.passes() > 0) send_frame(m_film, false, 0, 0);
+                    if (!restart)
+                        for (auto& [id, v] : m_pages)
+                            if (v.film.passes() > 0) send_frame(id, v, v.film, false, 0, 0);
                 }
                 publish_state();
-                return restart;
+                return restart ? Restart::all : Restart::none;
             } else if constexpr (std::is_same_v<T, SaveMsg>) {
                 save(p.client);
-                return false;
+                return Restart::none;
             } else if constexpr (std::is_same_v<T, RenderStillMsg>) {
                 render_still(p.client, m.spp);
-                return false;
+                return Restart::none;
             } else if constexpr (std::is_same_v<T, KeyframeAddMsg>) {
                 if (m_keyframes.size() >= size_t(k_max_keyframes))
                     throw Error("keyframe_add: the path has " + std::to_string(k_max_keyframes) +
                                 " keyframes already");
-                m_keyframes.push_back(s.cameras.back());
+                m_keyframes.push_back(page(p.client).camera);
                 publish_state();
-                return false;
+                return Restart::none;
             } else if constexpr (std::is_same_v<T, KeyframesClearMsg>) {
                 m_keyframes.clear();
                 publish_state();
-                return false;
+                return Restart::none;
             } else if constexpr (std::is_same_v<T, KeyframesSaveMsg>) {
                 save_keyframes(p.client, m.seconds_per_key);
-                return false;
+                return Restart::none;
             }
         },
         p.message);
 }
 
-void Viewer::render_preview() {
-    m_film.reset(m_width, m_height);
-    m_depth_range = 0.0f;  // the depth view's scale is taken again from the next pass
+void Viewer::render_preview(uint64_t client, PageView& v) {
+    v.film.reset(m_width, m_height);
+    v.depth_range = 0.0f;  // the depth view's scale is taken again from the next pass
     if (!m_preview) {
-        render_pass();
+        render_pass(client, v);
         return;
     }
     const render::RenderOptions o =
@@ -328,29 +421,29 @@ void Viewer::render_preview() {
     if (m_view == ViewLayer::beauty)
         preview.add(m_preview->render_frame(o));
     else
-        preview.add(render_view(*m_preview, o, false));
+        preview.add(render_view(*m_preview, o, false, v.depth_range));
     const double seconds = seconds_since(t0);
-    send_frame(preview, true, seconds, double(o.width) * o.height);
+    send_frame(client, v, preview, true, seconds, double(o.width) * o.height);
 }
 
-void Viewer::render_pass() {
+void Viewer::render_pass(uint64_t client, PageView& v) {
     render::RenderOptions o = options_for(m_width, m_height, 1);
-    o.seed = m_seed + uint64_t(m_film.passes());
+    o.seed = m_seed + uint64_t(v.film.passes());
     const auto t0 = Clock::now();
     if (m_view != ViewLayer::beauty)
-        m_film.add(render_view(*m_full, o, m_options.backend == "cpu"));
+        v.film.add(render_view(*m_full, o, m_options.backend == "cpu", v.depth_range));
     else if (m_options.backend == "cpu")
-        m_film.add(render_view(*m_full, o, true));
+        v.film.add(render_view(*m_full, o, true, v.depth_range));
     else
-        m_film.add(m_full->render_frame(o));
+        v.film.add(m_full->render_frame(o));
     const double seconds = seconds_since(t0);
     // At most ~30 frames a second: a GPU pass takes milliseconds and the page cannot show more.
-    if (m_film.passes() == 1 || m_film.passes() >= m_target_spp || seconds_since(m_last_send) >= 1.0 / 30)
-        send_frame(m_film, false, seconds, double(m_width) * m_height);
+    if (v.film.passes() == 1 || v.film.passes() >= m_target_spp || seconds_since(v.last_send) >= 1.0 / 30)
+        send_frame(client, v, v.film, false, seconds, double(m_width) * m_height);
 }
 
 Image Viewer::render_view(render::SceneRenderer& renderer, const render::RenderOptions& options,
-                          bool cancellable) {
+                          bool cancellable, float& depth_range) {
     render::ProgressFn progress;
     if (cancellable)  // a message arriving mid-pass stops it at the next tile
         progress = [this](uint64_t, uint64_t) {
@@ -359,17 +452,18 @@ Image Viewer::render_view(render::SceneRenderer& renderer, const render::RenderO
     if (m_view == ViewLayer::beauty) return renderer.render(options, progress);
     render::AovImages aovs;
     const Image rendered = renderer.render(view_options(options, m_view), progress, nullptr, &aovs);
-    if (m_view == ViewLayer::depth && !(m_depth_range > 0.0f)) {
+    if (m_view == ViewLayer::depth && !(depth_range > 0.0f)) {
         // Black a tenth beyond the farthest thing the first pass of this view saw; kept while it accumulates.
         float far = 0.0f;
         for (float d : aovs.depth.pixels)
             if (std::isfinite(d)) far = std::max(far, d);
-        m_depth_range = far > 0.0f ? 1.1f * far : 1.0f;
+        depth_range = far > 0.0f ? 1.1f * far : 1.0f;
     }
-    return view_image(m_view, rendered, aovs, m_depth_range);
+    return view_image(m_view, rendered, aovs, depth_range);
 }
 
-void Viewer::send_frame(const Accumulator& film, bool preview, double pass_seconds, double samples) {
+void Viewer::send_frame(uint64_t client, PageView& v, const Accumulator& film, bool preview, double pass_seconds,
+                        double samples) {
     // The views other than the beauty are pictures of data: no exposure.
     film.tonemap(m_view == ViewLayer::beauty ? m_exposure : 0.0, m_rgb);
     const std::string jpeg = m_jpeg.encode(m_rgb, film.width(), film.height());
@@ -384,11 +478,11 @@ void Viewer::send_frame(const Accumulator& film, bool preview, double pass_secon
                    {"preview", preview},
                    {"pass_ms", pass_seconds * 1e3},
                    {"samples_per_s", pass_seconds > 0 ? samples / pass_seconds : 0.0},
-                   {"camera", describe_camera(m_scene->cameras.back())},
-                   {"camera_from", m_camera_from}};
-    if (m_change_pending_latency) {
-        header["latency_ms"] = seconds_since(m_change_received) * 1e3;
-        m_change_pending_latency = false;
+                   {"camera", describe_camera(v.camera)},
+                   {"camera_from", v.camera_from}};
+    if (v.latency_pending) {
+        header["latency_ms"] = seconds_since(v.change_received) * 1e3;
+        v.latency_pending = false;
     }
     const std::string h = header.dump();
     auto frame = std::make_shared<std::string>();
@@ -397,9 +491,9 @@ void Viewer::send_frame(const Accumulator& film, bool preview, double pass_secon
     for (int i = 0; i < 4; ++i) (*frame)[size_t(i)] = char((n >> (8 * i)) & 0xff);
     *frame += h;
     *frame += jpeg;
-    m_last_send = Clock::now();
+    v.last_send = Clock::now();
     ++m_frames_sent;
-    m_sink.broadcast_frame(std::move(frame));
+    m_sink.send_frame(client, std::move(frame));
 }
 
 void Viewer::publish_state() {
@@ -417,7 +511,7 @@ void Viewer::publish_state() {
     st["savable"] = m_saver.can_save();
     st["why_not_savable"] = m_saver.why_not();
     st["keyframes"] = m_keyframes.size();
-    st["camera"] = describe_camera(m_scene->cameras.back());
+    st["camera"] = describe_camera(m_start_camera);  // where a new page starts
     auto text = std::make_shared<const std::string>(st.dump());
     {
         std::lock_guard lock(m_mutex);
@@ -459,6 +553,7 @@ void Viewer::render_still(uint64_t client, int spp) {
     fs::path png = exr;
     png.replace_extension(".png");
     const render::RenderOptions o = options_for(m_width, m_height, n);
+    aim_at(client);  // the page's view, as it shows it
     spdlog::info("serve: rendering a still {}x{} at {} spp to {}", m_width, m_height, n, exr.string());
     auto last = Clock::now();
     const auto t0 = Clock::now();

@@ -1,8 +1,9 @@
 // The viewer's render worker: owns the loaded scene and its prepared renderers (the same SceneRenderer that
-// `nerfpt render` uses, CPU or OptiX), applies the page's messages on its own thread, and renders
+// `nerfpt render` uses, CPU or OptiX), applies the pages' messages on its own thread, and renders
 // progressively: after any change one pass at a reduced resolution (the preview), then 1-sample passes at
-// full resolution accumulated until the target spp. Each frame is tone-mapped, JPEG-encoded and handed to the
-// sink (the server).
+// full resolution accumulated until the target spp. Every page has its own camera and film: a page's camera
+// move restarts only its film, a scene edit every page's; the worker takes the pages in turn. Each frame is
+// tone-mapped, JPEG-encoded and handed to the sink (the server) for its page.
 #pragma once
 
 #include <atomic>
@@ -11,6 +12,7 @@
 #include <cstdint>
 #include <deque>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -49,6 +51,8 @@ class Viewer final : public PageHandler {
     void stop();
     // From any thread: queued for the worker. A queue over k_max_queue drops the oldest camera message.
     void post(uint64_t client, ClientMessage message) override;
+    void page_opened(uint64_t client) override;
+    void page_closed(uint64_t client) override;
     // The state a newly connected page starts from (JSON text: {"type": "state", ...}).
     std::shared_ptr<const std::string> state() const override;
     // Frames handed to the sink so far (tests).
@@ -63,20 +67,41 @@ class Viewer final : public PageHandler {
         std::chrono::steady_clock::time_point received;
     };
     struct Cancelled {};
+    using Clock = std::chrono::steady_clock;
+    // One page's view: its camera and the film accumulated from it.
+    struct PageView {
+        scene::Camera camera;
+        uint64_t camera_from = 0;  // the page itself after its own move, 0 after the server placed the camera
+        Accumulator film;
+        float depth_range = 0.0f;  // the depth view's black (0: not yet taken from a pass since the last change)
+        bool dirty = true;         // the next frame is a preview after a change
+        bool latency_pending = false;
+        Clock::time_point change_received;  // when the oldest unserved change arrived
+        Clock::time_point last_send;
+        // A GPU pass cannot be cancelled: after a preview the first full pass waits this long for the next
+        // move, so that a drag's frames are previews, not a pass and then a preview.
+        Clock::time_point refine_after;
+    };
+    enum class Restart { none, page, all };  // whose film a message restarts
 
     void run();
     void prepare();                 // (re)builds the renderers for the scene as it is now
-    bool handle(const Pending& p);  // true when the image changes
+    Restart handle(const Pending& p);
     void apply_pose_change(bool camera, bool lights, bool volumes);
-    void render_preview();
-    void render_pass();
+    PageView& page(uint64_t client);  // made on first use (a page's messages may come before its opening)
+    bool has_work(Clock::time_point now, Clock::time_point* wake_at) const;
+    PageView* next_page(uint64_t* client);  // the next page to render for, in turn; null when none needs it
+    void aim_at(uint64_t client);           // the renderers' camera becomes the page's
+    void render_preview(uint64_t client, PageView& v);
+    void render_pass(uint64_t client, PageView& v);
     void render_still(uint64_t client, int spp);
     void save(uint64_t client);
     void save_keyframes(uint64_t client, double seconds_per_key);
-    void send_frame(const Accumulator& film, bool preview, double pass_seconds, double samples);
+    void send_frame(uint64_t client, PageView& v, const Accumulator& film, bool preview, double pass_seconds,
+                    double samples);
     // One pass of `renderer` as the page shows it (the beauty, or the view's layer made viewable).
-    Image render_view(render::SceneRenderer& renderer, const render::RenderOptions& options,
-                      bool cancellable);
+    Image render_view(render::SceneRenderer& renderer, const render::RenderOptions& options, bool cancellable,
+                      float& depth_range);
     void publish_state();
     void reply(uint64_t client, const std::string& type, nlohmann::json body);
     render::RenderOptions options_for(int width, int height, int spp) const;
@@ -93,32 +118,27 @@ class Viewer final : public PageHandler {
     int m_max_depth = 16;
     double m_exposure = 0;
     ViewLayer m_view = ViewLayer::beauty;
-    float m_depth_range =
-        0.0f;  // the depth view's black (0: not yet taken from a pass since the last change)
     bool m_spp_edited = false, m_depth_edited = false;
     std::vector<bool> m_volume_edited;
     std::vector<Rgb> m_light_base;
     std::vector<double> m_light_scale;
     std::vector<scene::Camera> m_keyframes;
-    uint64_t m_camera_from = 0;  // the client whose camera message moved the view last
     uint64_t m_seed = 0;
     int m_stills = 0;
 
-    Accumulator m_film;
+    scene::Camera m_start_camera;        // where a new page's view starts
+    std::map<uint64_t, PageView> m_pages;  // the worker thread's
+    static constexpr uint64_t k_nobody = ~uint64_t(0);
+    uint64_t m_aimed_at = k_nobody;  // the page whose camera the renderers hold
+    uint64_t m_last_rendered = 0;    // the page rendered for last: the next turn starts after it
     std::vector<uint8_t> m_rgb;
     JpegEncoder m_jpeg;
-    bool m_dirty = true;                                      // the next frame is a preview after a change
-    std::chrono::steady_clock::time_point m_change_received;  // when the oldest unserved change arrived
-    bool m_change_pending_latency = false;
-    std::chrono::steady_clock::time_point m_last_send;
-    // A GPU pass cannot be cancelled: after a preview the first full pass waits this long for the next move, so
-    // that a drag's frames are previews, not a pass and then a preview.
-    std::chrono::steady_clock::time_point m_refine_after;
     uint64_t m_seq = 0;
 
     mutable std::mutex m_mutex;
     std::condition_variable m_wake;
     std::deque<Pending> m_queue;
+    std::vector<uint64_t> m_opened, m_closed;  // pages, in the order the server saw them
     std::atomic<bool> m_interrupt{false};  // a message arrived: cancel the CPU pass in flight
     bool m_stop = false;
     std::shared_ptr<const std::string> m_state;

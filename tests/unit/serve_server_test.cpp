@@ -185,16 +185,30 @@ TEST(ServeServer, BadMessagesGetErrorsAndTheServerGoesOn) {
     for (int i = 0; i < 200 && r.server->sessions() > 0; ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
     EXPECT_EQ(r.server->sessions(), 0u);
-    // Two pages at once both get frames.
+    // Two pages at once: each has its own camera and gets the frames of its own view only.
     Client a(r.server->port()), b(r.server->port());
     a.until("state");
     b.until("state");
     a.send(R"({"type": "camera", "position": [0, 0.5, 5], "forward": [0, 0, -1]})");
-    const auto from_move = [](const json& f) {
-        return std::abs(f["camera"]["position"][1].get<double>() - 0.5) < 1e-6;
+    b.send(R"({"type": "camera", "position": [0, -0.5, 5], "forward": [0, 0, -1]})");
+    const auto at_height = [](double y) {
+        return [y](const json& f) { return std::abs(f["camera"]["position"][1].get<double>() - y) < 1e-6; };
     };
-    a.until("frame", from_move);
-    b.until("frame", from_move);
+    const auto settled = [](double y) {
+        return [y](const json& f) {
+            return std::abs(f["camera"]["position"][1].get<double>() - y) < 1e-6 && f["spp"] == 4 &&
+                   !f["preview"].get<bool>();
+        };
+    };
+    // Every frame up to its own settled view: the page's start camera (y = 0) or its own move, never the
+    // other page's.
+    for (auto [client, own, other] : {std::tuple{&a, 0.5, -0.5}, std::tuple{&b, -0.5, 0.5}}) {
+        json f;
+        do {
+            f = client->until("frame");
+            EXPECT_FALSE(at_height(other)(f)) << f.dump();
+        } while (!settled(own)(f) && !::testing::Test::HasFailure());
+    }
     EXPECT_EQ(r.server->sessions(), 2u);
 }
 
