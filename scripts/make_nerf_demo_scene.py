@@ -15,7 +15,9 @@ densities are per world unit, so the scene then sets density_scale = 1 / CUBE_SC
 as opaque as the model queried directly (whose sigma is per model unit, independent of the node's scale).
 Another model (a capture) is placed with --crop (model space, the part of the model that fills the cube: the
 object without its surroundings), --bottom (the object's lowest point in the cube's local z, -1..1, so that it
-stands on the pedestal), --cube-scale and --yaw.
+stands on the pedestal), --cube-scale and --yaw; or, when `nerfpt capture` found the object (the model
+carries its object frame), with --object: no crop, the object's own box and base, standing on the pedestal's
+top, scaled by --cube-scale (scene units per object unit: a metric capture's metres).
 """
 import argparse
 import base64
@@ -49,7 +51,11 @@ def main():
     ap.add_argument("--bottom", type=float, default=LEGO_BOTTOM_LOCAL, help="the object's lowest local z")
     ap.add_argument("--cube-scale", type=float, default=CUBE_SCALE, help="scene units per local unit")
     ap.add_argument("--yaw", type=float, default=-30.0, help="turn about the vertical, degrees")
+    ap.add_argument("--object", action="store_true",
+                    help="place a captured model by its object frame (\"placement\": \"object\") on the pedestal")
     args = ap.parse_args()
+    if args.object and (args.crop or not args.volume_file.endswith(".npt")):
+        ap.error("--object: a model file (.npt) with an object frame, and no --crop")
     out, volume_file, cube_scale = args.out, args.volume_file, args.cube_scale
     volume = {"file": volume_file}
     if args.crop:
@@ -113,10 +119,19 @@ def main():
     stand_up = [-math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4)]  # -90 degrees about X
     yaw = math.radians(args.yaw)
     rotation = quat_mul([0.0, math.sin(yaw / 2), 0.0, math.cos(yaw / 2)], stand_up)
-    add_mesh("lego", box(1.0), "volume",
-             {"translation": [PEDESTAL_AT[0], ped_top - args.bottom * cube_scale, PEDESTAL_AT[2]],
-              "rotation": rnd(rotation), "scale": [cube_scale] * 3,
-              "extras": {"volume": volume}})
+    if args.object:
+        # The cube's local space is the object frame, Y up, base centre at the origin: the node stands it on
+        # the pedestal's top and turns it about the vertical.
+        volume["placement"] = "object"
+        add_mesh("captured_object", box(1.0), "volume",
+                 {"translation": [PEDESTAL_AT[0], ped_top, PEDESTAL_AT[2]],
+                  "rotation": rnd([0.0, math.sin(yaw / 2), 0.0, math.cos(yaw / 2)]), "scale": [cube_scale] * 3,
+                  "extras": {"volume": volume}})
+    else:
+        add_mesh("lego", box(1.0), "volume",
+                 {"translation": [PEDESTAL_AT[0], ped_top - args.bottom * cube_scale, PEDESTAL_AT[2]],
+                  "rotation": rnd(rotation), "scale": [cube_scale] * 3,
+                  "extras": {"volume": volume}})
     nodes.append({"name": "camera", "translation": [0.0, 1.0, 3.9], "camera": 0})
 
     gltf = {
