@@ -106,7 +106,8 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         "                  --relightable also the relight stage)\n"
         "  6 eval       PSNR/SSIM on the held-out frames -> eval/ (renders, comparisons, metrics.json)\n"
         "  7 turntable  -> turntable.mp4, an orbit at the capture's camera distance, height and field of "
-        "view\n"
+        "view;\n"
+        "                  the object alone (its box) when stage 3 found it\n"
         "and writes capture.json (every stage's numbers) and report.md after each stage. Run the same "
         "command\n"
         "again after an error or Ctrl-C and it continues with the first unfinished stage (training resumes "
@@ -450,10 +451,13 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                                                      (rig.height / downscale) & ~1)
                                                        : args.turntable_res;
     const nlohmann::json& done_turntable = record.stage("turntable");
+    // The object alone when the object stage found it (attach_object above gave the model its frame): the room
+    // and the table are not in the video, and it renders several times faster.
+    const bool object_alone = object_frame_of_record(record.stage("object")).has_value();
     if (args.turntable_frames == 0) {
         stage(7, "turntable: skipped (--turntable-frames 0)");
     } else if (record.done("turntable") && done_turntable.value("frames", 0) == args.turntable_frames &&
-               done_turntable.value("res", "") == res) {
+               done_turntable.value("res", "") == res && done_turntable.value("object", false) == object_alone) {
         stage(7, "turntable: done in an earlier run (turntable.mp4)");
     } else {
         stage(7, "turntable: rendering turntable.mp4");
@@ -467,12 +471,14 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         v.distance = float(rig.median_distance);
         v.threads = args.threads;
         v.backend = backend();
+        v.object = object_alone;
         const Clock clock;
         const int rc = run_view(v, global, interrupts);
         if (rc != 0) return rc;
         record.finish("turntable", {{"file", "turntable.mp4"},
                                     {"frames", args.turntable_frames},
                                     {"res", res},
+                                    {"object", object_alone},
                                     {"elevation_deg", v.elevation},
                                     {"distance", v.distance},
                                     {"seconds", clock.seconds()}});

@@ -81,7 +81,7 @@ CLI::App* add_eval_command(CLI::App& app, EvalArgs& args) {
     cmd->add_flag("--object", args.object,
                   "Render only what lies inside the model's object box (the object frame `nerfpt capture` "
                   "stores), exactly as a scene's volume with \"placement\": \"object\" cuts it: scores the "
-                  "object alone against --masks (CPU renderer)");
+                  "object alone against --masks");
     alpha->needs(cmd->get_option("--output"));
     add_backend_option(cmd, args.backend);
     return cmd;
@@ -180,9 +180,6 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     const nerf::NerfModel model = nerf::load_model(args.model);
     if (args.object && !model.object)
         throw Error(args.model + ": --object: the model has no object frame (made by `nerfpt capture`)");
-    if (args.object && !args.backend.empty() && args.backend != "cpu")
-        throw Error("--object: the object alone is rendered by the CPU view renderer only (--backend cpu, the "
-                    "default with --object)");
     const bool tty = stream_is_tty(stderr);
     nerf::Dataset data = load_dataset_with_progress(args.data, args.split, args.downscale, global.quiet);
 
@@ -206,8 +203,7 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     for (size_t k = 0; k < masks.size(); ++k)
         truth_masks.push_back(load_view_mask(masks[k], views[k], data, args.downscale));
     // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
-    const auto renderer = nerf::make_view_renderer(
-        args.object ? nerf::Backend::cpu : resolve_backend(args.backend), model);
+    const auto renderer = nerf::make_view_renderer(resolve_backend(args.backend), model);
     spdlog::info("evaluating {} of {} views at {}x{} on {}", views.size(), data.cameras.size(), data.width,
                  data.height, renderer->device());
 

@@ -29,6 +29,7 @@
 #include "nerf/dataset.h"
 #include "nerf/eval_images.h"
 #include "nerf/model_file.h"
+#include "nerf/object_frame.h"
 #include "nerf/orbit_camera.h"
 #include "backend_option.h"
 #include "nerf/render_view.h"
@@ -47,15 +48,16 @@ CLI::App* add_view_command(CLI::App& app, ViewArgs& args) {
         "view", "Render novel views of a trained model: one data-set camera, or an orbit video around it");
     cmd->footer(
         "Without --camera, renders an orbit: --orbit frames on a circle around the centre of the model's\n"
-        "cube, at --elevation degrees above the horizontal plane and --distance world units from the\n"
-        "centre, looking at it. Up is world +Z, as in NeRF-synthetic (the world space of the training\n"
+        "cube (with --object: of the object's box), at --elevation degrees above the horizontal plane and\n"
+        "--distance world units from the centre, looking at it. Up is world +Z, as in NeRF-synthetic (the world space of the training\n"
         "cameras). The default distance is 1.32 model units (4.0 world units for a model trained on\n"
         "NeRF-synthetic, whose cameras sit at radius 4). The background is white.\n"
         "OUT ending in .mp4 is encoded with ffmpeg (libx264, yuv420p: width and height must be even;\n"
         "ffmpeg must be on PATH); OUT ending in .png writes OUT_0000.png, OUT_0001.png, ... instead.\n"
         "With --camera, OUT must end in .png and gets the one image.\n"
         "Examples: nerfpt view lego.npt -o lego.mp4 --orbit 120 --res 400x400\n"
-        "          nerfpt view lego.npt -o r_7.png --camera ../shared/data/nerf_synthetic/lego:7");
+        "          nerfpt view lego.npt -o r_7.png --camera ../shared/data/nerf_synthetic/lego:7\n"
+        "          nerfpt view capture/model.npt -o object.mp4 --object   (the captured object alone)");
     cmd->add_option("MODEL", args.model, "Model file written by 'nerfpt train' (.npt)")->required();
     cmd->add_option("-o,--output", args.output, "Output: .mp4 video or .png image(s); its folder must exist")
         ->required();
@@ -99,6 +101,10 @@ CLI::App* add_view_command(CLI::App& app, ViewArgs& args) {
     cmd->add_option("--fps", args.fps, "Video frame rate, 1..240 (default: 30)")
         ->check(CLI::Range(1.0f, 240.0f))
         ->excludes(camera);
+    cmd->add_flag("--object", args.object,
+                  "Only the captured object: what lies inside the model's object box (the object frame `nerfpt "
+                  "capture` stores), cut as a scene's volume with \"placement\": \"object\" cuts it; an orbit "
+                  "then circles the box's centre");
     add_backend_option(cmd, args.backend);
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads (default: 0)")
         ->check(CLI::Range(0, 4096));
@@ -226,13 +232,15 @@ int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard&
     if (args.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
 
     const nerf::NerfModel model = nerf::load_model(args.model);
+    if (args.object && !model.object)
+        throw Error(args.model + ": --object: the model has no object frame (made by `nerfpt capture`)");
     std::vector<nerf::Camera> cameras;
     std::vector<InputFile> inputs{{"MODEL", args.model}};
     if (!args.camera.empty()) {
         cameras.push_back(data_camera(args, data_path, camera_index, &inputs));
     } else {
         nerf::OrbitSettings orbit;
-        orbit.centre = nerf::model_centre_world(model);
+        orbit.centre = args.object ? nerf::object_box_centre_world(*model.object) : nerf::model_centre_world(model);
         orbit.distance = args.distance > 0 ? double(args.distance) : nerf::default_orbit_distance(model);
         orbit.elevation_deg = args.elevation;
         orbit.width = width;
@@ -269,13 +277,15 @@ int run_view(const ViewArgs& args, const GlobalSettings& global, InterruptGuard&
     // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
     const auto renderer = nerf::make_view_renderer(resolve_backend(args.backend), model);
     spdlog::info("rendering on {}", renderer->device());
+    nerf::ViewOptions view_options;  // white background
+    view_options.object_only = args.object;
     interrupts.set_cooperative(true);
     const auto t0 = std::chrono::steady_clock::now();
     try {
         uint64_t rows_before = 0;
         for (size_t k = 0; k < cameras.size(); ++k) {
             const Image img =
-                renderer->render(cameras[k], nerf::ViewOptions{}, [&](size_t done, size_t) {
+                renderer->render(cameras[k], view_options, [&](size_t done, size_t) {
                     progress.update(rows_before + done, total_rows);
                     return !interrupts.stop_requested();
                 });

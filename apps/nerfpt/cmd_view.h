@@ -20,6 +20,7 @@ struct ViewArgs {
     float elevation = 30.0f;
     float distance = 0;  // world units; 0: from the model's scale
     float fps = 30.0f;
+    bool object = false;  // only the object box of a captured model (its object frame); an orbit circles it
     int threads = 0;
     std::string backend;  // "", cpu or cuda (backend_option.h)
 };

@@ -131,4 +131,19 @@ Mat4 model_to_object(const ObjectFrame& f, const Mat4& world_to_model) {
     return (world_to_model * f.object_to_world).inverse();
 }
 
+Vec3 object_box_centre_world(const ObjectFrame& f) {
+    return f.object_to_world.transform_point((f.box_min + f.box_max) * 0.5f);
+}
+
+ObjectCut object_cut(const ObjectFrame& f, const Mat4& world_to_model) {
+    const Mat4 to_object = model_to_object(f, world_to_model);
+    ObjectCut cut;
+    cut.active = true;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) cut.m[4 * r + c] = float(to_object.m[r][c]);
+    cut.box_min = f.box_min;
+    cut.box_max = f.box_max;
+    return cut;
+}
+
 }  // namespace npt::nerf

@@ -11,6 +11,7 @@
 #include "core/transform.h"
 #include "core/vec.h"
 #include "nerf/nerf_placement.h"
+#include "nerf/object_cut.h"
 
 namespace npt::nerf {
 
@@ -42,5 +43,9 @@ LocalToModel object_local_to_model(const ObjectFrame& frame, const Mat4& world_t
 CropBox object_model_box(const ObjectFrame& frame, const Mat4& world_to_model);
 // Model space -> object space (+Z up, the supporting plane at z = 0), with world_to_model the model's.
 Mat4 model_to_object(const ObjectFrame& frame, const Mat4& world_to_model);
+// The centre of the object's box in the training world.
+Vec3 object_box_centre_world(const ObjectFrame& frame);
+// The test of model-space points against the object's box (object_cut.h), active.
+ObjectCut object_cut(const ObjectFrame& frame, const Mat4& world_to_model);
 
 }  // namespace npt::nerf

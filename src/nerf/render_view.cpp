@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "nerf/field_batch.h"
+#include "nerf/object_frame.h"
 
 namespace npt::nerf {
 
@@ -43,13 +44,7 @@ Image render_view(const NerfModel& model, const Camera& camera, const ViewOption
     if (options.object_only && !model.object)
         throw Error("render_view: only the object was asked for, and the model has no object frame (made by "
                     "`nerfpt capture`)");
-    // Model space -> object space, for the object box's test of each sample.
-    const Mat4 to_object = options.object_only ? model_to_object(*model.object, model.world_to_model) : Mat4{};
-    auto outside_object = [&](Vec3 p) {
-        const Vec3 o = to_object.transform_point(p);
-        const Vec3 lo = model.object->box_min, hi = model.object->box_max;
-        return o.x < lo.x || o.y < lo.y || o.z < lo.z || o.x > hi.x || o.y > hi.y || o.z > hi.z;
-    };
+    const ObjectCut cut = options.object_only ? object_cut(*model.object, model.world_to_model) : ObjectCut{};
     std::mutex progress_mutex;
     std::atomic<bool> stop{false};
     size_t rows_done = 0;
@@ -71,7 +66,7 @@ Image render_view(const NerfModel& model, const Camera& camera, const ViewOption
                 // A fixed mid-step offset: an image must not change from one render to the next.
                 const size_t n = march_ray(mp, grid, ray, 0.5f, buf.data());
                 for (size_t s = 0; s < n; ++s)
-                    if (!options.object_only || !outside_object(buf[s].position)) samples.push_back(buf[s]);
+                    if (!cut.outside(buf[s].position)) samples.push_back(buf[s]);
                 rs.count = uint32_t(samples.size() - rs.first);
                 rays.push_back(rs);
             }

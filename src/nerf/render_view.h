@@ -17,8 +17,8 @@ struct ViewOptions {
     // default. The image does not depend on it, only the time; the CPU ignores it.
     int gpu_first_round = 0;
     // Only what lies inside the model's object box (its object frame, issue 25) is seen: samples outside it are
-    // dropped, as a `volume` cube with "placement": "object" cuts the model. The CPU renderer only; a model
-    // without an object frame is an error.
+    // dropped, as a `volume` cube with "placement": "object" cuts the model (object_cut.h, the same test on the
+    // CPU and the GPU). A model without an object frame is an error.
     bool object_only = false;
 };
 

@@ -54,7 +54,7 @@ for opt in MODEL DATA --split --output --every --downscale --threads --alpha --m
 done
 run view --help
 [[ $rc -eq 0 ]] || fail "view --help: exit code $rc"
-for opt in MODEL --output --camera --split --orbit --res --fov --elevation --distance --fps --threads ffmpeg "+Z"; do
+for opt in MODEL --output --camera --split --orbit --res --fov --elevation --distance --fps --object --threads ffmpeg "+Z"; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt view --help does not mention $opt"
 done
 run bake --help

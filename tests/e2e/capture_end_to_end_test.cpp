@@ -188,6 +188,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     EXPECT_LT(std::hypot(base.x(), base.z()), 0.05);
     EXPECT_NEAR(height, 1.0, 0.1);
     EXPECT_TRUE(nerf::load_model(work / "model.npt").object.has_value());
+    EXPECT_TRUE(stages["turntable"].value("object", false)) << "the turntable shows the object alone";
 
     // Negative controls, so that the limits are known to catch a broken stage: cameras left in COLMAP's
     // OpenCV axes (y and z flipped), and neighbouring frames' poses swapped (a pairing off by one frame in

@@ -19,6 +19,8 @@
 #include "nerf/cuda/cuda_renderer.h"
 #include "nerf/cuda/cuda_trainer.h"
 #include "nerf/model_file.h"
+#include "nerf/object_frame.h"
+#include "nerf/orbit_camera.h"
 #include "nerf/render_view.h"
 #include "nerf/trainer.h"
 #include "nerf_test_scene.h"
@@ -121,12 +123,13 @@ TEST(NerfCuda, Fp16FieldIsTheCpuFieldWithinHalfPrecision) {
 // a sample across a skipped cell's boundary; every pixel within 1e-3 (pixels are in [0, 1]: the 1e-3
 // relative at full scale). With empty cells a ray grazing a boundary may march differently: 99.5% of the
 // values within 1e-3.
-void expect_pixels_match(const NerfModel& m, bool strict) {
+void expect_pixels_match(const NerfModel& m, bool strict, bool object_only = false) {
     const Dataset views = test::make_sphere_scene({.views = 3, .size = 40, .view_seed = 9});
     cuda::CudaViewRenderer r32(m, cuda::Precision::fp32), r16(m, cuda::Precision::fp16);
     for (size_t v = 0; v < views.cameras.size(); ++v) {
         ViewOptions o;
         o.background = Rgb(0.2f, 0.5f, 0.9f);
+        o.object_only = object_only;
         const Image cpu = render_view(m, views.cameras[v], o);
         const Image g32 = r32.render(views.cameras[v], o);
         const Image g16 = r16.render(views.cameras[v], o);
@@ -154,6 +157,33 @@ void expect_pixels_match(const NerfModel& m, bool strict) {
 TEST(NerfCuda, RenderedPixelsMatchTheCpu) {
     expect_pixels_match(random_model(5, false), true);
     expect_pixels_match(random_model(6, true), false);
+}
+
+// `view --object` / `eval --object` on the GPU: the samples outside the object's box are skipped as the CPU
+// drops them (object_cut.h). The box, half the model's cube wide and standing on its middle, cuts the model.
+TEST(NerfCuda, TheObjectAloneMatchesTheCpu) {
+    NerfModel m = random_model(5, false);
+    const double world_per_model = 1.0 / model_scale(m);
+    const Vec3 centre = model_centre_world(m);
+    ObjectFrame f;  // object units = model units, +Z up = world +Z
+    f.object_to_world = Mat4::translation(centre.x, centre.y, centre.z) *
+                        Mat4::scale(world_per_model, world_per_model, world_per_model);
+    f.box_min = Vec3(-0.25f, -0.25f, 0.0f);
+    f.box_max = Vec3(0.25f, 0.25f, 0.5f);
+    m.object = f;
+    expect_pixels_match(m, true, true);
+    // The cut is real: the CPU's object image has less coverage than the whole model's.
+    const Dataset views = test::make_sphere_scene({.views = 1, .size = 40, .view_seed = 9});
+    ViewOptions whole, alone;
+    alone.object_only = true;
+    const Image a = render_view(m, views.cameras[0], whole), b = render_view(m, views.cameras[0], alone);
+    double cover_a = 0, cover_b = 0;
+    for (size_t i = 3; i < a.pixels.size(); i += 4) {
+        cover_a += a.pixels[i];
+        cover_b += b.pixels[i];
+    }
+    EXPECT_LT(cover_b, 0.8 * cover_a);
+    EXPECT_GT(cover_b, 0.0);
 }
 
 // The gradient of one batch (the same rays: both trainers draw them from (seed, step, ray)) on both backends,

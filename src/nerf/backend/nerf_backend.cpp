@@ -91,9 +91,6 @@ class GpuViewRenderer final : public ViewRendererBackend {
         : m_renderer(model, p == ViewPrecision::fp32 ? cuda::Precision::fp32 : cuda::Precision::fp16) {}
     Image render(const Camera& camera, const ViewOptions& options,
                  const std::function<bool(size_t, size_t)>& progress) override {
-        if (options.object_only)
-            throw Error("the object alone (an object frame's box) is rendered by the CPU view renderer only: "
-                        "use --backend cpu");
         Image img = m_renderer.render(camera, options);
         if (progress && !progress(size_t(camera.height), size_t(camera.height))) throw Error("interrupted");
         return img;
