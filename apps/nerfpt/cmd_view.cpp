@@ -49,9 +49,9 @@ CLI::App* add_view_command(CLI::App& app, ViewArgs& args) {
     cmd->footer(
         "Without --camera, renders an orbit: --orbit frames on a circle around the centre of the model's\n"
         "cube (with --object: of the object's box), at --elevation degrees above the horizontal plane and\n"
-        "--distance world units from the centre, looking at it. Up is world +Z, as in NeRF-synthetic (the world space of the training\n"
-        "cameras). The default distance is 1.32 model units (4.0 world units for a model trained on\n"
-        "NeRF-synthetic, whose cameras sit at radius 4). The background is white.\n"
+        "--distance world units from the centre, looking at it. Up is world +Z, as in NeRF-synthetic (the\n"
+        "world space of the training cameras). The default distance is 1.32 model units (4.0 world units\n"
+        "for a model trained on NeRF-synthetic, whose cameras sit at radius 4). The background is white.\n"
         "OUT ending in .mp4 is encoded with ffmpeg (libx264, yuv420p: width and height must be even;\n"
         "ffmpeg must be on PATH); OUT ending in .png writes OUT_0000.png, OUT_0001.png, ... instead.\n"
         "With --camera, OUT must end in .png and gets the one image.\n"
