@@ -30,6 +30,14 @@ struct RayState {
 
 }  // namespace
 
+ObjectCut view_object_cut(const NerfModel& model, const ViewOptions& options) {
+    if (!options.object_only) return ObjectCut{};
+    if (!model.object)
+        throw Error("render_view: only the object was asked for, and the model has no object frame (made by "
+                    "`nerfpt capture`)");
+    return object_cut(*model.object, model.world_to_model);
+}
+
 Image render_view(const NerfModel& model, const Camera& camera, const ViewOptions& options,
                   const std::function<bool(size_t, size_t)>& progress) {
     const int w = camera.width, h = camera.height;
@@ -41,10 +49,7 @@ Image render_view(const NerfModel& model, const Camera& camera, const ViewOption
     const float min_t = model.config.march.min_transmittance;
     const float* params = model.params.data();
     const size_t n_tasks = (size_t(h) + k_rows_per_task - 1) / k_rows_per_task;
-    if (options.object_only && !model.object)
-        throw Error("render_view: only the object was asked for, and the model has no object frame (made by "
-                    "`nerfpt capture`)");
-    const ObjectCut cut = options.object_only ? object_cut(*model.object, model.world_to_model) : ObjectCut{};
+    const ObjectCut cut = view_object_cut(model, options);
     std::mutex progress_mutex;
     std::atomic<bool> stop{false};
     size_t rows_done = 0;

@@ -8,6 +8,7 @@
 #include "core/image.h"
 #include "nerf/dataset.h"
 #include "nerf/nerf_model.h"
+#include "nerf/object_cut.h"
 
 namespace npt::nerf {
 
@@ -21,6 +22,10 @@ struct ViewOptions {
     // CPU and the GPU). A model without an object frame is an error.
     bool object_only = false;
 };
+
+// The object test a view renderer applies for `options` (inactive unless object_only). Throws npt::Error when
+// object_only is asked of a model without an object frame.
+ObjectCut view_object_cut(const NerfModel& model, const ViewOptions& options);
 
 // Returns an RGBA image: colour composited over the background, as the training images store it (sRGB-encoded
 // values in [0,1], not linear light), and alpha = 1 - transmittance. `progress(done_rows, rows)` is called

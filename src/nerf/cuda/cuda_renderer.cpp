@@ -12,7 +12,6 @@
 #include "nerf/cuda/fused_mlp.h"
 #include "nerf/cuda/occupancy_bits.h"
 #include "nerf/cuda/render_kernels.h"
-#include "nerf/object_frame.h"
 
 namespace npt::nerf::cuda {
 
@@ -111,12 +110,7 @@ void CudaViewRenderer::Impl::run(const Camera& camera, const ViewOptions& option
     f.min_transmittance = model.config.march.min_transmittance;
     f.box_min = box_min;
     f.box_max = box_max;
-    if (options.object_only) {
-        if (!model.object)
-            throw Error("render_view: only the object was asked for, and the model has no object frame (made by "
-                        "`nerfpt capture`)");
-        f.object = object_cut(*model.object, model.world_to_model);
-    }
+    f.object = view_object_cut(model, options);
     RenderSlots slots{slot_pos.data(), slot_dt.data(), slot_pixel.data(), slot_first.data(), slot_used.data(),
                       counts.data() + 2, slot_scratch.data()};
 

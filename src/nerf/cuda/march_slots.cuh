@@ -5,19 +5,23 @@
 
 #include "core/cuda/warp_lists.cuh"
 #include "nerf/cuda/render_kernels.h"
+#include "nerf/object_cut.h"
 #include "nerf/ray_march.h"
 
 namespace npt::nerf::cuda {
 
 // Item a of the round's live list marches `ray` from cursor c and packs its samples under `owner` (the index of its
-// direction for the MLP). Every lane of the warp must call it; `live` is false for lanes without an item.
+// direction for the MLP). Every lane of the warp must call it; `live` is false for lanes without an item. Samples
+// outside an active `cut` are passed over, as the CPU view renderer drops them (they still count toward
+// mp.max_samples, as there); the path tracer's callers leave it inactive, which the inlining folds away.
 __device__ __forceinline__ void march_into_slots(bool live, uint32_t a, uint32_t owner, const MarchParams& mp,
                                                  const OccupancyGridView& grid, const Ray& ray, MarchCursor& c,
-                                                 int k, const RenderSlots& slots) {
+                                                 int k, const RenderSlots& slots, const ObjectCut& cut = {}) {
     int used = 0;
     float4* mine = slots.scratch + size_t(a) * size_t(k);
     if (live)
         march_continue(mp, grid, ray, c, [&](const MarchSample& s) {
+            if (cut.outside(s.position)) return true;
             mine[used++] = make_float4(s.position.x, s.position.y, s.position.z, s.dt);
             return used < k;
         });

@@ -50,7 +50,7 @@ __global__ void __launch_bounds__(k_block) march_kernel(RenderFrame f, const uin
         c = f.rays[pixel].cursor;  // in registers while marching
         ray = f.rays[pixel].ray;
     }
-    march_into_slots(live, a, pixel, f.march, f.grid, ray, c, k, slots);
+    march_into_slots(live, a, pixel, f.march, f.grid, ray, c, k, slots, f.object);
     if (live) f.rays[pixel].cursor = c;
 }
 
@@ -78,8 +78,6 @@ __global__ void __launch_bounds__(k_block) composite_kernel(RenderFrame f, const
         const int used = slots.used[a];
         // render_view.cpp's arithmetic, sample by sample.
         for (int j = 0; j < used; ++j) {
-            // Outside the object's box: not there (the CPU drops such samples before evaluating them).
-            if (f.object.outside(slots.pos[base + j])) continue;
             const float t_before = expf(-tau);
             const float od = sigma[base + j] * slots.dt[base + j];
             color += rgb[base + j] * (t_before * -expm1f(-od));

@@ -33,7 +33,7 @@ struct RenderFrame {
     OccupancyGridView grid;
     float min_transmittance = 1e-4f;
     Vec3 box_min{-1e30f, -1e30f, -1e30f}, box_max{1e30f, 1e30f, 1e30f};  // around the occupied cells
-    ObjectCut object;  // active: samples outside the object's box are skipped (ViewOptions::object_only)
+    ObjectCut object;  // active: the march passes over samples outside the object's box (object_only)
 };
 
 struct RenderSlots {              // the samples of a round, packed (each live ray reserves what it marched)
