@@ -68,7 +68,7 @@ Rgb average_color(const nerf::NerfFieldView& view, Vec3 p) {
     return c;
 }
 
-Rgb to_linear(Rgb c) { return Rgb(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)); }
+Rgb srgb_colour_to_linear(Rgb c) { return Rgb(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)); }
 
 // Tolerances. The bake evaluates the field batched (matrix products, hash encoding in another order) and the
 // reference is the per-sample NPT_HD query: they differ by float rounding, ~1e-6 relative on the MLP outputs,
@@ -127,7 +127,7 @@ void expect_round_trip(const NerfModel& model, const BakedGrid& g, GridFormat f,
                 << i << "," << j << "," << k;
         else
             EXPECT_EQ(r.density[idx], 0.0f);
-        test::expect_near(r.color[idx], to_linear(c), k_color_abs);
+        test::expect_near(r.color[idx], srgb_colour_to_linear(c), k_color_abs);
     }
     // The raw reader adds a one-voxel clamp-to-edge border (docs/formats.md): count inside it.
     const int b = f == GridFormat::raw ? 1 : 0;

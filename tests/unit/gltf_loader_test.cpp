@@ -36,7 +36,7 @@ std::string png_bytes(int w, int h, const std::vector<unsigned char>& rgb) {
 }
 
 // Expects load_scene to throw an npt::Error whose message contains each of `parts`.
-void expect_error(const fs::path& path, std::initializer_list<std::string> parts,
+void expect_gltf_error(const fs::path& path, std::initializer_list<std::string> parts,
                   const LoadOptions& opt = {}) {
     test::expect_error_message([&] { load_scene(path, opt); }, parts);
 }
@@ -216,7 +216,7 @@ TEST(GltfLoader, CameraSelection) {
         EXPECT_FLOAT_EQ(c.yfov, 0.2f);
         EXPECT_FLOAT_EQ(c.aspect, 2.0f);
     }
-    expect_error(path, {"scene.gltf", "camera 'nope' not found", "cam_a", "cam_b"}, LoadOptions{"nope"});
+    expect_gltf_error(path, {"scene.gltf", "camera 'nope' not found", "cam_a", "cam_b"}, LoadOptions{"nope"});
 }
 
 TEST(GltfLoader, OrthographicCameraIsAnError) {
@@ -225,7 +225,7 @@ TEST(GltfLoader, OrthographicCameraIsAnError) {
                        {"type", "orthographic"},
                        {"orthographic", {{"xmag", 1}, {"ymag", 1}, {"znear", 0.1}, {"zfar", 10}}}}};
     b.node({{"name", "cam"}, {"camera", 0}});
-    expect_error(b.write(), {"scene.gltf", "cam", "orthographic cameras are not supported yet"});
+    expect_gltf_error(b.write(), {"scene.gltf", "cam", "orthographic cameras are not supported yet"});
 }
 
 TEST(GltfLoader, PunctualLights) {
@@ -323,7 +323,7 @@ TEST(GltfLoader, TexturesEmbeddedExternalAndShared) {
     EXPECT_EQ(s.meshes[0].uvs.size(), 3u);
 
     fs::remove(path.parent_path() / "tex.png");
-    expect_error(path, {"scene.gltf", "material 'a'", "image 1", "tex.png"});
+    expect_gltf_error(path, {"scene.gltf", "material 'a'", "image 1", "tex.png"});
 }
 
 TEST(GltfLoader, BinaryGlb) {
@@ -356,20 +356,20 @@ TEST(GltfLoader, SceneExtrasSetRenderSettings) {
     EXPECT_EQ(s.settings.max_depth, 3);
     expect_near(s.environment.color, {0.1f, 0.2f, 0.3f});
     b.j["scenes"][0]["extras"]["width"] = "wide";
-    expect_error(b.write(), {"scene.gltf", "extras.width"});
+    expect_gltf_error(b.write(), {"scene.gltf", "extras.width"});
 }
 
 // ---- bad input -------------------------------------------------------------------------------------------
 
 TEST(GltfLoaderBadInput, MissingEmptyMalformed) {
     const fs::path dir = test::temp_dir();
-    expect_error(dir / "absent.gltf", {"absent.gltf", "not found"});
+    expect_gltf_error(dir / "absent.gltf", {"absent.gltf", "not found"});
     test::write_file(dir / "empty.gltf", "");
-    expect_error(dir / "empty.gltf", {"empty.gltf", "empty"});
+    expect_gltf_error(dir / "empty.gltf", {"empty.gltf", "empty"});
     test::write_file(dir / "bad.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [");
-    expect_error(dir / "bad.gltf", {"bad.gltf"});
+    expect_gltf_error(dir / "bad.gltf", {"bad.gltf"});
     test::write_file(dir / "bad.glb", "glTF\x02\0\0\0\xff\xff\xff\x7f");
-    expect_error(dir / "bad.glb", {"bad.glb"});
+    expect_gltf_error(dir / "bad.glb", {"bad.glb"});
 }
 
 TEST(GltfLoaderBadInput, BufferShorterThanAccessor) {
@@ -377,7 +377,7 @@ TEST(GltfLoaderBadInput, BufferShorterThanAccessor) {
     int mesh = b.triangle(-1, "floor");
     b.j["accessors"][0]["count"] = 100;  // 1200 bytes claimed, the view holds 36
     b.node({{"mesh", mesh}});
-    expect_error(b.write(), {"scene.gltf", "accessor 0", "POSITION of mesh 'floor'", "1200 bytes",
+    expect_gltf_error(b.write(), {"scene.gltf", "accessor 0", "POSITION of mesh 'floor'", "1200 bytes",
                              "buffer view 0", "36"});
 }
 
@@ -386,21 +386,21 @@ TEST(GltfLoaderBadInput, BufferViewBeyondBuffer) {
     int mesh = b.triangle();
     b.j["bufferViews"][0]["byteOffset"] = 4096;
     b.node({{"mesh", mesh}});
-    expect_error(b.write(), {"scene.gltf", "buffer view 0", "beyond buffer 0"});
+    expect_gltf_error(b.write(), {"scene.gltf", "buffer view 0", "beyond buffer 0"});
 }
 
 TEST(GltfLoaderBadInput, IndexOutOfRange) {
     Builder b;
     int p = b.vec3({0, 0, 0, 1, 0, 0, 0, 1, 0});
     b.node({{"mesh", b.mesh({{"POSITION", p}}, b.indices32({0, 1, 7}), -1, "tri")}});
-    expect_error(b.write(), {"scene.gltf", "mesh 'tri'", "index 2 = 7", "out of range"});
+    expect_gltf_error(b.write(), {"scene.gltf", "mesh 'tri'", "index 2 = 7", "out of range"});
 }
 
 TEST(GltfLoaderBadInput, NanVertex) {
     Builder b;
     int p = b.vec3({0, 0, 0, std::nanf(""), 0, 0, 0, 1, 0});
     b.node({{"mesh", b.mesh({{"POSITION", p}}, b.indices32({0, 1, 2}), -1, "tri")}});
-    expect_error(b.write(), {"scene.gltf", "mesh 'tri'", "accessor 0", "position 1", "not finite"});
+    expect_gltf_error(b.write(), {"scene.gltf", "mesh 'tri'", "accessor 0", "position 1", "not finite"});
 }
 
 TEST(GltfLoaderBadInput, AbsurdAccessorCount) {
@@ -408,7 +408,7 @@ TEST(GltfLoaderBadInput, AbsurdAccessorCount) {
     int mesh = b.triangle();
     b.j["accessors"][0]["count"] = 1000000000000ULL;
     b.node({{"mesh", mesh}});
-    expect_error(b.write(), {"scene.gltf", "accessor 0", "1000000000000"});
+    expect_gltf_error(b.write(), {"scene.gltf", "accessor 0", "1000000000000"});
 }
 
 TEST(GltfLoaderBadInput, MissingBinFile) {
@@ -418,14 +418,14 @@ TEST(GltfLoaderBadInput, MissingBinFile) {
     d["buffers"] = {{{"byteLength", b.bin.size()}, {"uri", "missing.bin"}}};
     const fs::path path = test::temp_dir() / "scene.gltf";
     test::write_file(path, d.dump());
-    expect_error(path, {"scene.gltf", "missing.bin"});
+    expect_gltf_error(path, {"scene.gltf", "missing.bin"});
 }
 
 TEST(GltfLoaderBadInput, NodeCycle) {
     Builder b;
     b.node({{"children", {1}}});
     b.node({{"children", {0}}}, false);
-    expect_error(b.write(), {"scene.gltf", "cycle"});
+    expect_gltf_error(b.write(), {"scene.gltf", "cycle"});
 }
 
 // tinygltf keeps the default where a value has the wrong type; check_schema reports it with its JSON path.
@@ -479,9 +479,9 @@ TEST(GltfLoaderBadInput, OutOfRangeValues) {
         b.node({{"mesh", b.triangle(0)}});
         return b;
     };
-    expect_error(material({{"KHR_materials_ior", {{"ior", -1}}}}).write(),
+    expect_gltf_error(material({{"KHR_materials_ior", {{"ior", -1}}}}).write(),
                  {"scene.gltf", "materials[0].extensions.KHR_materials_ior.ior", "-1", ">= 1"});
-    expect_error(material({{"KHR_materials_emissive_strength", {{"emissiveStrength", -100}}}}).write(),
+    expect_gltf_error(material({{"KHR_materials_emissive_strength", {{"emissiveStrength", -100}}}}).write(),
                  {"scene.gltf", "emissiveStrength", "-100", ">= 0"});
     {
         Builder b;
@@ -490,12 +490,12 @@ TEST(GltfLoaderBadInput, OutOfRangeValues) {
                           {"perspective", {{"yfov", 0.5}, {"znear", 0.1}, {"aspectRatio", -2}}}}});
         b.node({{"camera", 0}});
         b.node({{"mesh", b.triangle()}});
-        expect_error(b.write(), {"scene.gltf", "cameras[0].perspective.aspectRatio", "-2", "> 0"});
+        expect_gltf_error(b.write(), {"scene.gltf", "cameras[0].perspective.aspectRatio", "-2", "> 0"});
     }
     {
         Builder b;
         b.node({{"mesh", b.triangle()}, {"rotation", {0, 0, 0, 0}}});
-        expect_error(b.write(), {"scene.gltf", "nodes[0].rotation", "zero"});
+        expect_gltf_error(b.write(), {"scene.gltf", "nodes[0].rotation", "zero"});
     }
     {
         Builder b;
@@ -503,7 +503,7 @@ TEST(GltfLoaderBadInput, OutOfRangeValues) {
             json::array({{{"type", "point"}, {"intensity", -5}}});
         b.node({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
         b.node({{"mesh", b.triangle()}});
-        expect_error(b.write(), {"scene.gltf", "KHR_lights_punctual.lights[0].intensity", "-5"});
+        expect_gltf_error(b.write(), {"scene.gltf", "KHR_lights_punctual.lights[0].intensity", "-5"});
     }
     test::LogCapture log;
     Builder b = material({{"KHR_materials_transmission", {{"transmissionFactor", 5}}}},
@@ -533,12 +533,12 @@ TEST(GltfLoaderBadInput, TransformsOverflowingWorldSpace) {
         b.node({{"name", "big"},
                 {"mesh", mesh},
                 {"matrix", {3e38, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 3e38, 0, 0, 1}}});
-        expect_error(b.write(), {"scene.gltf", "mesh 'tri'", "position 0", "not finite in world space"});
+        expect_gltf_error(b.write(), {"scene.gltf", "mesh 'tri'", "position 0", "not finite in world space"});
     }
     {
         Builder b;
         b.node({{"name", "far"}, {"mesh", b.triangle()}, {"scale", {1e30, 1e30, 1e30}}});
-        expect_error(b.write(), {"scene.gltf", "position 1", "beyond", "in world space"});
+        expect_gltf_error(b.write(), {"scene.gltf", "position 1", "beyond", "in world space"});
     }
     {
         Builder b;
@@ -546,7 +546,7 @@ TEST(GltfLoaderBadInput, TransformsOverflowingWorldSpace) {
             json::array({{{"type", "perspective"}, {"perspective", {{"yfov", 0.5}, {"znear", 0.1}}}}});
         b.node({{"name", "cam"}, {"camera", 0}, {"translation", {1e30, 0, 0}}});
         b.node({{"mesh", b.triangle()}});
-        expect_error(b.write(), {"scene.gltf", "camera 'cam'", "position", "beyond"});
+        expect_gltf_error(b.write(), {"scene.gltf", "camera 'cam'", "position", "beyond"});
     }
 }
 
@@ -558,7 +558,7 @@ TEST(GltfLoaderBadInput, DeeplyNestedExtrasAreRefusedNotACrash) {
     text.insert(text.rfind('}'), ", \"extras\": " + deep);
     const fs::path path = test::temp_dir() / "deep.gltf";
     test::write_file(path, text);
-    expect_error(path, {"deep.gltf", "nested deeper than 256 levels"});
+    expect_gltf_error(path, {"deep.gltf", "nested deeper than 256 levels"});
 }
 
 // A buffer URI naming a FIFO (or /dev/stdin) would block tinygltf's reader forever: regular files only.
@@ -570,7 +570,7 @@ TEST(GltfLoaderBadInput, FifoBufferIsRefusedNotWaitedFor) {
     const fs::path path = test::temp_dir() / "scene.gltf";
     ASSERT_EQ(::mkfifo((path.parent_path() / "pipe.bin").c_str(), 0600), 0);
     test::write_file(path, d.dump());
-    expect_error(path, {"scene.gltf", "pipe.bin"});
+    expect_gltf_error(path, {"scene.gltf", "pipe.bin"});
 }
 
 }  // namespace

@@ -12,10 +12,10 @@
 namespace npt::dist {
 namespace {
 
-std::map<std::string, std::string>* g_env = nullptr;
-const char* fake_getenv(const char* name) {
-    const auto it = g_env->find(name);
-    return it == g_env->end() ? nullptr : it->second.c_str();
+std::map<std::string, std::string>* g_binding_env = nullptr;
+const char* fake_binding_getenv(const char* name) {
+    const auto it = g_binding_env->find(name);
+    return it == g_binding_env->end() ? nullptr : it->second.c_str();
 }
 
 TEST(GpuBinding, LocalRankTakesItsGpu) {
@@ -33,22 +33,22 @@ TEST(GpuBinding, LocalRankTakesItsGpu) {
 
 TEST(GpuBinding, LauncherEnvironment) {
     std::map<std::string, std::string> env;
-    g_env = &env;
-    EXPECT_EQ(launcher_world_size(fake_getenv), 0);
-    EXPECT_EQ(launcher_local_rank(fake_getenv), -1);
+    g_binding_env = &env;
+    EXPECT_EQ(launcher_world_size(fake_binding_getenv), 0);
+    EXPECT_EQ(launcher_local_rank(fake_binding_getenv), -1);
     env = {{"OMPI_COMM_WORLD_SIZE", "4"}, {"OMPI_COMM_WORLD_LOCAL_RANK", "2"}};
-    EXPECT_EQ(launcher_world_size(fake_getenv), 4);
-    EXPECT_EQ(launcher_local_rank(fake_getenv), 2);
+    EXPECT_EQ(launcher_world_size(fake_binding_getenv), 4);
+    EXPECT_EQ(launcher_local_rank(fake_binding_getenv), 2);
     env = {{"PMI_SIZE", "8"}, {"MPI_LOCALRANKID", "1"}};
-    EXPECT_EQ(launcher_world_size(fake_getenv), 8);
-    EXPECT_EQ(launcher_local_rank(fake_getenv), 1);
+    EXPECT_EQ(launcher_world_size(fake_binding_getenv), 8);
+    EXPECT_EQ(launcher_local_rank(fake_binding_getenv), 1);
     env = {{"PMIX_RANK", "0"}, {"SLURM_LOCALID", "3"}};
-    EXPECT_EQ(launcher_world_size(fake_getenv), 1);
-    EXPECT_EQ(launcher_local_rank(fake_getenv), 3);
+    EXPECT_EQ(launcher_world_size(fake_binding_getenv), 1);
+    EXPECT_EQ(launcher_local_rank(fake_binding_getenv), 3);
     env = {{"OMPI_COMM_WORLD_SIZE", "x"}, {"OMPI_COMM_WORLD_LOCAL_RANK", "-1"}};
-    EXPECT_EQ(launcher_world_size(fake_getenv), 0);
-    EXPECT_EQ(launcher_local_rank(fake_getenv), -1);
-    g_env = nullptr;
+    EXPECT_EQ(launcher_world_size(fake_binding_getenv), 0);
+    EXPECT_EQ(launcher_local_rank(fake_binding_getenv), -1);
+    g_binding_env = nullptr;
 }
 
 TEST(GpuBinding, AWorldOfOneWithoutALauncher) {

@@ -30,7 +30,7 @@ size_t file_count(const fs::path& dir) {
 }
 
 template <typename F>
-void expect_error(F&& f, std::initializer_list<std::string> parts) {
+void expect_image_error(F&& f, std::initializer_list<std::string> parts) {
     test::expect_error_message(std::forward<F>(f), parts);
 }
 
@@ -140,21 +140,21 @@ TEST(ImageIo, HdrIsLinear) {
 
 TEST(ImageIoBadInput, MissingFile) {
     const fs::path dir = test::temp_dir();
-    expect_error([&] { read_image(dir / "none.png"); }, {"none.png", "not found"});
-    expect_error([&] { read_image(dir / "none.exr"); }, {"none.exr", "not found"});
+    expect_image_error([&] { read_image(dir / "none.png"); }, {"none.png", "not found"});
+    expect_image_error([&] { read_image(dir / "none.exr"); }, {"none.exr", "not found"});
 }
 
 TEST(ImageIoBadInput, EmptyAndTruncatedPng) {
     const fs::path dir = test::temp_dir();
     test::write_file(dir / "empty.png", "");
-    expect_error([&] { read_image(dir / "empty.png"); }, {"empty.png"});
+    expect_image_error([&] { read_image(dir / "empty.png"); }, {"empty.png"});
     Image img(16, 16, 3);
     write_png(dir / "full.png", img);
     const std::string bytes = read_all(dir / "full.png");
     test::write_file(dir / "cut.png", bytes.substr(0, bytes.size() / 2));
-    expect_error([&] { read_image(dir / "cut.png"); }, {"cut.png"});
+    expect_image_error([&] { read_image(dir / "cut.png"); }, {"cut.png"});
     test::write_file(dir / "header.png", bytes.substr(0, 20));
-    expect_error([&] { read_image(dir / "header.png"); }, {"header.png"});
+    expect_image_error([&] { read_image(dir / "header.png"); }, {"header.png"});
 }
 
 TEST(ImageIo, SizeFromTheHeaderAlone) {
@@ -167,12 +167,12 @@ TEST(ImageIo, SizeFromTheHeaderAlone) {
     const std::string bytes = read_all(dir / "f.png");
     test::write_file(dir / "cut.png", bytes.substr(0, 40));
     EXPECT_EQ(read_image_size(dir / "cut.png").width, 24);
-    expect_error([&] { read_image_size(dir / "none.png"); }, {"none.png", "not found"});
+    expect_image_error([&] { read_image_size(dir / "none.png"); }, {"none.png", "not found"});
     test::write_file(dir / "empty.png", "");
-    expect_error([&] { read_image_size(dir / "empty.png"); }, {"empty.png"});
+    expect_image_error([&] { read_image_size(dir / "empty.png"); }, {"empty.png"});
     std::vector<unsigned char> row(40000 * 3, 0);
     ASSERT_TRUE(stbi_write_png((dir / "wide.png").string().c_str(), 40000, 1, 3, row.data(), 40000 * 3));
-    expect_error([&] { read_image_size(dir / "wide.png"); }, {"wide.png", "40000x1", "limit"});
+    expect_image_error([&] { read_image_size(dir / "wide.png"); }, {"wide.png", "40000x1", "limit"});
 }
 
 TEST(ImageIoBadInput, TruncatedExr) {
@@ -184,19 +184,19 @@ TEST(ImageIoBadInput, TruncatedExr) {
     for (size_t cut : {size_t(4), size_t(40), bytes.size() / 2, bytes.size() - 8}) {
         const fs::path p = dir / ("cut" + std::to_string(cut) + ".exr");
         test::write_file(p, bytes.substr(0, cut));
-        expect_error([&] { read_image(p); }, {p.filename().string()});
+        expect_image_error([&] { read_image(p); }, {p.filename().string()});
     }
 }
 
 TEST(ImageIoBadInput, ZeroAndAbsurdSizes) {
     const fs::path dir = test::temp_dir();
-    expect_error([&] { write_png(dir / "zero.png", Image(0, 0, 3)); }, {"zero.png", "0x0"});
-    expect_error([&] { write_exr(dir / "zero.exr", Image(0, 0, 3)); }, {"zero.exr", "0x0"});
+    expect_image_error([&] { write_png(dir / "zero.png", Image(0, 0, 3)); }, {"zero.png", "0x0"});
+    expect_image_error([&] { write_exr(dir / "zero.exr", Image(0, 0, 3)); }, {"zero.exr", "0x0"});
     EXPECT_EQ(file_count(dir), 0u);
     // A valid PNG wider than the limit is rejected from its header, before decoding.
     std::vector<unsigned char> row(40000 * 3, 0);
     ASSERT_TRUE(stbi_write_png((dir / "wide.png").string().c_str(), 40000, 1, 3, row.data(), 40000 * 3));
-    expect_error([&] { read_image(dir / "wide.png"); }, {"wide.png", "40000x1", "limit"});
+    expect_image_error([&] { read_image(dir / "wide.png"); }, {"wide.png", "40000x1", "limit"});
     // An EXR header claiming a data window of 10^6 x 10^6 pixels.
     Image small(4, 4, 3);
     write_exr(dir / "huge.exr", small);
@@ -207,7 +207,7 @@ TEST(ImageIoBadInput, ZeroAndAbsurdSizes) {
     const int32_t box[4] = {0, 0, 999999, 999999};
     std::memcpy(&bytes[at + key.size() + 4], box, sizeof(box));
     test::write_file(dir / "huge.exr", bytes);
-    expect_error([&] { read_image(dir / "huge.exr"); }, {"huge.exr"});
+    expect_image_error([&] { read_image(dir / "huge.exr"); }, {"huge.exr"});
 }
 
 // An attribute whose size reaches past the end of the file is refused before OpenEXR allocates that size (it
@@ -223,12 +223,12 @@ TEST(ImageIoBadInput, ExrAttributeSizePastTheEnd) {
         std::string bad = bytes;
         std::memcpy(&bad[at + key.size()], &size, sizeof size);
         test::write_file(dir / "bad.exr", bad);
-        expect_error([&] { read_image(dir / "bad.exr"); }, {"bad.exr", "'channels'", "claims"});
+        expect_image_error([&] { read_image(dir / "bad.exr"); }, {"bad.exr", "'channels'", "claims"});
     }
     // A name without its terminating null within 31 characters.
     std::string long_name = bytes.substr(0, 8) + std::string(40, 'x');
     test::write_file(dir / "long.exr", long_name);
-    expect_error([&] { read_image(dir / "long.exr"); }, {"long.exr", "longer than 31"});
+    expect_image_error([&] { read_image(dir / "long.exr"); }, {"long.exr", "longer than 31"});
     // Sizes inside the file that disagree with the value's layout (fuzz_image: a channel list whose records take
     // 63 bytes where the file says 55 put OpenEXR out of step; it then asked for 1.7 GB): a channel list stated
     // shorter than its records, and a fixed-size value (box2i, 16 bytes) stated longer.
@@ -238,7 +238,7 @@ TEST(ImageIoBadInput, ExrAttributeSizePastTheEnd) {
     const int32_t shorter = listed - 8;
     std::memcpy(&short_list[at + key.size()], &shorter, sizeof shorter);
     test::write_file(dir / "short_list.exr", short_list);
-    expect_error([&] { read_image(dir / "short_list.exr"); }, {"short_list.exr", "'channels'", "contents"});
+    expect_image_error([&] { read_image(dir / "short_list.exr"); }, {"short_list.exr", "'channels'", "contents"});
     const std::string box_key = std::string("dataWindow") + '\0' + "box2i" + '\0';
     const size_t box_at = bytes.find(box_key);
     ASSERT_NE(box_at, std::string::npos);
@@ -246,15 +246,15 @@ TEST(ImageIoBadInput, ExrAttributeSizePastTheEnd) {
     const int32_t box_size = 20;
     std::memcpy(&long_box[box_at + box_key.size()], &box_size, sizeof box_size);
     test::write_file(dir / "long_box.exr", long_box);
-    expect_error([&] { read_image(dir / "long_box.exr"); }, {"long_box.exr", "'dataWindow'", "a box2i has 16"});
+    expect_image_error([&] { read_image(dir / "long_box.exr"); }, {"long_box.exr", "'dataWindow'", "a box2i has 16"});
     // The valid file still reads.
     EXPECT_EQ(read_image(dir / "ok.exr").width, 4);
 }
 
 TEST(ImageIoBadInput, UnwritableFolder) {
     const fs::path dir = test::temp_dir() / "no" / "such" / "folder";
-    expect_error([&] { write_png(dir / "x.png", Image(2, 2, 3)); }, {"x.png"});
-    expect_error([&] { write_exr(dir / "x.exr", Image(2, 2, 3)); }, {"x.exr"});
+    expect_image_error([&] { write_png(dir / "x.png", Image(2, 2, 3)); }, {"x.png"});
+    expect_image_error([&] { write_exr(dir / "x.exr", Image(2, 2, 3)); }, {"x.exr"});
 }
 
 }  // namespace

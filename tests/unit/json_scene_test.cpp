@@ -18,7 +18,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-void expect_error(const fs::path& path, std::initializer_list<std::string> parts) {
+void expect_scene_error(const fs::path& path, std::initializer_list<std::string> parts) {
     test::expect_error_message([&] { load_scene(path); }, parts);
 }
 
@@ -106,9 +106,9 @@ TEST(JsonScene, VolumesArePlacedCubesWithTheirFill) {
     EXPECT_FALSE(extras["volume"].contains("translation"));
 
     test::write_file(dir / "bad.json", R"({"volumes": [{"translation": [0, 0, 0]}]})");
-    expect_error(dir / "bad.json", {"bad.json", "volumes[0].file"});
+    expect_scene_error(dir / "bad.json", {"bad.json", "volumes[0].file"});
     test::write_file(dir / "bad2.json", R"({"volumes": {"file": "x"}})");
-    expect_error(dir / "bad2.json", {"bad2.json", "volumes"});
+    expect_scene_error(dir / "bad2.json", {"bad2.json", "volumes"});
 }
 
 TEST(JsonScene, CameraByName) {
@@ -117,7 +117,7 @@ TEST(JsonScene, CameraByName) {
     Scene s = load_scene(dir / "a.json");
     expect_near(s.cameras[size_t(s.camera)].position, {0, 0, 7});
     test::write_file(dir / "b.json", R"({"include": ["cam.gltf"], "camera": {"name": "other"}})");
-    expect_error(dir / "b.json", {"b.json", "camera.name", "'other' not found", "'cam'"});
+    expect_scene_error(dir / "b.json", {"b.json", "camera.name", "'other' not found", "'cam'"});
 }
 
 TEST(JsonScene, UnknownKeysAreWarnings) {
@@ -182,7 +182,7 @@ TEST(JsonSceneBadInput, WrongTypesAndMissingFiles) {
 TEST(SceneDispatch, UnknownExtension) {
     const fs::path dir = test::temp_dir();
     test::write_file(dir / "x.ply", "ply\n");
-    expect_error(dir / "x.ply", {"x.ply", "unknown scene format"});
+    expect_scene_error(dir / "x.ply", {"x.ply", "unknown scene format"});
 }
 
 }  // namespace

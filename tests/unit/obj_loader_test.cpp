@@ -14,7 +14,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void expect_error(const fs::path& path, std::initializer_list<std::string> parts) {
+void expect_obj_error(const fs::path& path, std::initializer_list<std::string> parts) {
     test::expect_error_message([&] { load_scene(path); }, parts);
 }
 
@@ -112,15 +112,15 @@ TEST(ObjLoader, MissingMtlGivesDefaultMaterial) {
 
 TEST(ObjLoaderBadInput, MissingEmptyAndBroken) {
     const fs::path dir = test::temp_dir();
-    expect_error(dir / "none.obj", {"none.obj", "not found"});
+    expect_obj_error(dir / "none.obj", {"none.obj", "not found"});
     test::write_file(dir / "empty.obj", "");
-    expect_error(dir / "empty.obj", {"empty.obj", "no triangles"});
+    expect_obj_error(dir / "empty.obj", {"empty.obj", "no triangles"});
     // tinyobjloader reads the text "nan" as 0; an overflowing literal is how a non-finite value gets through.
     test::write_file(dir / "nan.obj", "v 0 0 0\nv 1e400 0 0\nv 0 1 0\nf 1 2 3\n");
-    expect_error(dir / "nan.obj", {"nan.obj"});
+    expect_obj_error(dir / "nan.obj", {"nan.obj"});
     test::write_file(dir / "tex.obj", "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl t\nf 1 2 3\n");
     test::write_file(dir / "t.mtl", "newmtl t\nmap_Kd missing.png\n");
-    expect_error(dir / "tex.obj", {"tex.obj", "material 't'", "map_Kd", "missing.png"});
+    expect_obj_error(dir / "tex.obj", {"tex.obj", "material 't'", "map_Kd", "missing.png"});
 }
 
 // tinyobjloader turns numbers it cannot parse into 0 and reads indices with atoi, unchecked; our strict pass
@@ -182,9 +182,9 @@ TEST(ObjLoaderBadInput, FifosAreRefusedNotWaitedFor) {
     EXPECT_EQ(load_scene(dir / "a.obj").triangle_count(), 1u);  // a warning, the default material
     test::write_file(dir / "t.mtl", "newmtl t\nmap_Kd pipe.png\n");
     test::write_file(dir / "b.obj", "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl t\nf 1 2 3\n");
-    expect_error(dir / "b.obj", {"b.obj", "map_Kd", "pipe.png", "not a regular file"});
+    expect_obj_error(dir / "b.obj", {"b.obj", "map_Kd", "pipe.png", "not a regular file"});
     ASSERT_EQ(::mkfifo((dir / "c.obj").c_str(), 0600), 0);
-    expect_error(dir / "c.obj", {"c.obj", "not a regular file"});
+    expect_obj_error(dir / "c.obj", {"c.obj", "not a regular file"});
 }
 
 }  // namespace

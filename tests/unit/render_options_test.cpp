@@ -9,7 +9,7 @@
 namespace npt::render {
 namespace {
 
-void expect_error(const RenderOptions& o, const std::string& needle) {
+void expect_options_error(const RenderOptions& o, const std::string& needle) {
     scene::Scene s;
     test::expect_error_message([&] { resolve_options(s, o); }, {needle});
 }
@@ -40,30 +40,30 @@ TEST(RenderOptions, RejectsZeroAbsurdAndUnknown) {
     RenderOptions o;
     o.width = 1;
     o.height = 0;
-    expect_error(o, "--res");
+    expect_options_error(o, "--res");
     o.width = k_max_resolution + 1;
     o.height = 10;
-    expect_error(o, "--res");
+    expect_options_error(o, "--res");
     o.width = k_max_resolution;
     o.height = k_max_resolution;  // each side allowed, but 1.07 G pixels is not
-    expect_error(o, "pixels");
+    expect_options_error(o, "pixels");
     o = {};
     o.width = o.height = 8;
     o.spp = k_max_spp + 1;
-    expect_error(o, "--spp");
+    expect_options_error(o, "--spp");
     o.spp = -3;
-    expect_error(o, "--spp");
+    expect_options_error(o, "--spp");
     o.spp = 1;
     o.max_depth = k_max_depth + 1;
-    expect_error(o, "--max-depth");
+    expect_options_error(o, "--max-depth");
     o.max_depth = 4;
     o.threads = -1;
-    expect_error(o, "--threads");
+    expect_options_error(o, "--threads");
     o.threads = 0;
     o.backend = "gpu";
-    expect_error(o, "unknown backend 'gpu' (available: cpu, optix)");
+    expect_options_error(o, "unknown backend 'gpu' (available: cpu, optix)");
     o.backend = "vulkan";
-    expect_error(o, "unknown backend");
+    expect_options_error(o, "unknown backend");
 }
 
 }  // namespace

@@ -38,14 +38,14 @@ scene::VolumeInstance cube(Vec3 centre, float half, const std::string& extras,
     return v;
 }
 
-Rgb trace(const scene::Scene& s, Ray ray) { return test::trace_one_path(s, ray); }
+Rgb trace_volume(const scene::Scene& s, Ray ray) { return test::trace_one_path(s, ray); }
 
-void expect_rgb(Rgb got, Vec3 expected, const char* what) {
+void expect_volume_rgb(Rgb got, Vec3 expected, const char* what) {
     for (int k = 0; k < 3; ++k)
         EXPECT_NEAR(got[k], expected[k], 1e-3 * std::max(expected[k], 1e-3f)) << what << " ch " << k;
 }
 
-struct Fixture {
+struct VolumeFixture {
     std::filesystem::path dir = test::temp_dir();
     // sigma_ngp 3 over a cube of side 0.5 (half 0.25): sigma per world unit 3 / 0.5 = 6.
     const float sigma = 6.0f;
@@ -55,27 +55,27 @@ struct Fixture {
         return std::string(R"({"volume": {"file": "8x8x8_constant.bin", "casts_shadows": )") +
                (shadows ? "true" : "false") + "}}";
     }
-    Fixture() { write_constant_raw(dir, 3.0f, srgb); }
+    VolumeFixture() { write_constant_raw(dir, 3.0f, srgb); }
 };
 
 TEST(VolumeRender, SeenDirectlyOverABackground) {
-    Fixture f;
+    VolumeFixture f;
     scene::Scene s;
     s.source = f.dir / "scene.gltf";
     s.environment.color = Vec3(0.1f, 0.2f, 0.3f);
     s.volumes = {cube({0, 0, 0}, 0.25f, f.extras(), f.dir)};
     // Along z through the centre: d = 0.5.
-    Rgb l = trace(s, {{0, 0, 3}, {0, 0, -1}});
+    Rgb l = trace_volume(s, {{0, 0, 3}, {0, 0, -1}});
     float t = std::exp(-f.sigma * 0.5f);
-    expect_rgb(l, f.linear() * (1 - t) + s.environment.color * t, "direct");
+    expect_volume_rgb(l, f.linear() * (1 - t) + s.environment.color * t, "direct");
     // From inside (the camera in the volume): d = 0.25 - (-0.1) = 0.35 towards +x... going -z from z = 0.1.
-    l = trace(s, {{0.05f, 0.0f, 0.1f}, {0, 0, -1}});
+    l = trace_volume(s, {{0.05f, 0.0f, 0.1f}, {0, 0, -1}});
     t = std::exp(-f.sigma * 0.35f);
-    expect_rgb(l, f.linear() * (1 - t) + s.environment.color * t, "inside");
+    expect_volume_rgb(l, f.linear() * (1 - t) + s.environment.color * t, "inside");
 }
 
 TEST(VolumeRender, SeenInAMirrorAndClippedByASurfaceInside) {
-    Fixture f;
+    VolumeFixture f;
     scene::Scene s;
     s.source = f.dir / "scene.gltf";
     scene::Material mirror;
@@ -103,17 +103,17 @@ TEST(VolumeRender, SeenInAMirrorAndClippedByASurfaceInside) {
     float tx = 0.25f / std::fabs(dir.x), tz = 0.25f / std::fabs(dir.z);
     float d = 2.0f * std::min(tx, tz);
     float t = std::exp(-f.sigma * d);
-    expect_rgb(trace(s, ray), f.linear() * (1 - t), "mirror");
+    expect_volume_rgb(trace_volume(s, ray), f.linear() * (1 - t), "mirror");
 
     // A black wall through the cube's centre plane z = 0 (facing +z): only the front half glows.
     s.meshes = {test::make_quad({-5, -5, 0}, {10, 0, 0}, {0, 10, 0}, 1)};
     s.materials = {black, black};
     t = std::exp(-f.sigma * 0.25f);
-    expect_rgb(trace(s, {{0.05f, 0.05f, 3}, {0, 0, -1}}), f.linear() * (1 - t), "clipped");
+    expect_volume_rgb(trace_volume(s, {{0.05f, 0.05f, 3}, {0, 0, -1}}), f.linear() * (1 - t), "clipped");
 }
 
 TEST(VolumeRender, CastsShadowsOnlyWhenAsked) {
-    Fixture f;
+    VolumeFixture f;
     scene::Scene s;
     s.source = f.dir / "scene.gltf";
     scene::Material floor;
@@ -134,13 +134,13 @@ TEST(VolumeRender, CastsShadowsOnlyWhenAsked) {
     Vec3 p{0.1f, 0.0f, 0.05f}, eye{2.0f, 2.0f, 0.05f};
     Ray ray{eye, normalize(p - eye)};
     const float lit = 0.5f / 3.14159265f * 2.0f;  // albedo / pi * E * cos(0)
-    expect_rgb(trace(s, ray), Vec3(lit * std::exp(-f.sigma * 0.5f)), "shadowed");
+    expect_volume_rgb(trace_volume(s, ray), Vec3(lit * std::exp(-f.sigma * 0.5f)), "shadowed");
     s.volumes = {cube({0, 1, 0}, 0.25f, f.extras(false), f.dir)};
-    expect_rgb(trace(s, ray), Vec3(lit), "casts_shadows false");
+    expect_volume_rgb(trace_volume(s, ray), Vec3(lit), "casts_shadows false");
 }
 
 TEST(VolumeRender, BadVolumeDescriptionsAreOneLineErrors) {
-    Fixture f;
+    VolumeFixture f;
     scene::Scene s;
     s.source = f.dir / "scene.gltf";
     s.volumes = {cube({0, 0, 0}, 0.25f, "", f.dir)};

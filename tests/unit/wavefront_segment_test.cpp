@@ -36,11 +36,11 @@ media::VolumeResult march_query(const media::VolumeView& v, const gpu::NerfQuery
 }
 
 // levels 4, features up to 2, half the cells occupied; scales other than 1 so that they are tested too.
-struct Fixture {
+struct SegmentFixture {
     std::mt19937 g{3};
     test::RandomNerfVolume volume{config(), g, 2.0f, 0.5f};
     media::VolumeView& nerf_volume = volume.view;
-    Fixture() {
+    SegmentFixture() {
         nerf_volume.density_scale = 0.4f;
         nerf_volume.emission_scale = 1.3f;
     }
@@ -57,7 +57,7 @@ struct Fixture {
 bool near(float a, float b) { return std::fabs(a - b) <= 1e-4f * std::max(1.0f, std::fabs(b)); }
 
 TEST(WavefrontSegment, AQueuedNerfSegmentMarchesToTheIntegratorsResult) {
-    Fixture f;
+    SegmentFixture f;
     const media::VolumeView volumes[1] = {f.nerf_volume};
     const uint32_t slots[1] = {0};
     std::mt19937 g(7);
@@ -96,7 +96,7 @@ TEST(WavefrontSegment, AQueuedNerfSegmentMarchesToTheIntegratorsResult) {
 // What the NeRF pass does not take is integrated in place, as trace_path would: a NeRF without a pass slot, and
 // a ray crossing two volumes (a grid cube around the NeRF's).
 TEST(WavefrontSegment, OtherSegmentsAreIntegratedInPlace) {
-    Fixture f;
+    SegmentFixture f;
     std::vector<float> density(8 * 8 * 8, 0.5f);
     std::vector<Vec3> color(density.size(), Vec3(0.2f, 0.4f, 0.6f));
     media::VolumeView grid;
