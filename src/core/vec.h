@@ -15,6 +15,7 @@ using std::isnan;
 
 constexpr float k_pi = 3.14159265358979323846f;
 constexpr float k_inv_pi = 0.31830988618379067154f;
+constexpr float k_two_pi = 6.28318530717958647693f;
 constexpr float k_inv_2pi = 0.15915494309189533577f;
 constexpr float k_inv_4pi = 0.07957747154594766788f;
 

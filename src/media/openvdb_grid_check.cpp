@@ -19,7 +19,7 @@ constexpr uint32_t k_zip = 0x1, k_active_mask = 0x2, k_blosc = 0x4;
 constexpr int8_t k_one_inactive_no_mask = 2, k_mask_no_inactive = 3, k_mask_one_inactive = 4,
                  k_mask_two_inactive = 5, k_all_values = 6;
 
-std::string str(uint64_t v) { return std::to_string(v); }
+std::string decimal(uint64_t v) { return std::to_string(v); }
 
 // A blosc block's 16-byte header: format versions, flags, then (uint32) uncompressed size, block size,
 // compressed size including the header. blosc_decompress_ctx takes no source size: it trusts the last one.
@@ -27,16 +27,16 @@ std::string str(uint64_t v) { return std::to_string(v); }
 void check_blosc_header(VdbByteReader& r, int64_t stored, uint64_t expect, bool padded,
                         const std::string& what) {
     if (stored < 16)
-        r.fail(what + ": a blosc block of " + str(uint64_t(stored)) + " bytes is shorter than its header");
+        r.fail(what + ": a blosc block of " + decimal(uint64_t(stored)) + " bytes is shorter than its header");
     std::array<unsigned char, 16> h;
     r.read_bytes(h.data(), h.size(), what);
     uint32_t nbytes, cbytes;
     std::memcpy(&nbytes, h.data() + 4, 4);
     std::memcpy(&cbytes, h.data() + 12, 4);
     if (cbytes > uint64_t(stored))
-        r.fail(what + ": a blosc block of " + str(uint64_t(stored)) + " bytes claims " + str(cbytes));
+        r.fail(what + ": a blosc block of " + decimal(uint64_t(stored)) + " bytes claims " + decimal(cbytes));
     if (nbytes != expect && !(padded && nbytes == 128 && expect <= 128))
-        r.fail(what + ": a blosc block decompresses to " + str(nbytes) + " bytes where " + str(expect) +
+        r.fail(what + ": a blosc block decompresses to " + decimal(nbytes) + " bytes where " + decimal(expect) +
                " are expected");
     r.skip(uint64_t(stored) - 16, what);
 }
@@ -59,14 +59,14 @@ void skip_block(VdbByteReader& r, uint32_t compression, uint64_t bytes, const st
     if (n <= 0) {
         if (n == std::numeric_limits<int64_t>::min() || uint64_t(-n) != bytes)
             r.fail(what + ": an uncompressed block of " +
-                   (n == std::numeric_limits<int64_t>::min() ? "2^63" : str(uint64_t(-n))) +
-                   " bytes where the node holds " + str(bytes));
+                   (n == std::numeric_limits<int64_t>::min() ? "2^63" : decimal(uint64_t(-n))) +
+                   " bytes where the node holds " + decimal(bytes));
         return r.skip(bytes, what);
     }
     const uint64_t bound = max_compressed(compression, bytes);
     if (uint64_t(n) > bound)
-        r.fail(what + ": a compressed block of " + str(uint64_t(n)) + " bytes for " + str(bytes) +
-               " bytes of values (at most " + str(bound) + ")");
+        r.fail(what + ": a compressed block of " + decimal(uint64_t(n)) + " bytes for " + decimal(bytes) +
+               " bytes of values (at most " + decimal(bound) + ")");
     r.need(uint64_t(n), what);
     if (compression & k_blosc) return check_blosc_header(r, n, bytes, false, what);
     r.skip(uint64_t(n), what);  // zlib's uncompress is given the node's size
@@ -146,7 +146,7 @@ void check_origin(VdbByteReader& r, const std::array<int32_t, 3>& origin, const 
 void skip_openvdb_metadata(VdbByteReader& r, const std::string& what) {
     const uint32_t count = r.read<uint32_t>(what + " count");
     for (uint32_t i = 0; i < count; ++i) {
-        const std::string item = what + " " + str(i);
+        const std::string item = what + " " + decimal(i);
         const std::string name = r.string(item + " name");
         const std::string type = r.string(item + " type");
         const uint32_t stored = r.read<uint32_t>(item + " size");
@@ -156,7 +156,7 @@ void skip_openvdb_metadata(VdbByteReader& r, const std::string& what) {
             const uint64_t start = r.pos();
             const uint32_t leaves = r.read<uint32_t>(field);
             if (leaves > r.size() / 64)  // each leaf's topology takes 64 bytes of the file
-                r.fail(field + ": lists " + str(leaves) + " leaves, more than the file can hold");
+                r.fail(field + ": lists " + decimal(leaves) + " leaves, more than the file can hold");
             for (const uint64_t per_leaf : {1, 8}) {  // node flags, then compressed sizes
                 const uint32_t bytes = r.read<uint32_t>(field);
                 if (per_leaf == 8 && bytes == std::numeric_limits<uint32_t>::max()) break;
@@ -193,7 +193,7 @@ void check_openvdb_grid(VdbByteReader& r, const VdbGridInfo& info) {
     // Tree::readTopology: one buffer per node since OpenVDB 3 (it warns on stderr and reads on otherwise).
     const uint32_t buffers = r.read<uint32_t>(where + " tree");
     if (buffers != 1)
-        r.fail(where + ": " + str(buffers) + " buffers per node (only single-buffer trees are supported)");
+        r.fail(where + ": " + decimal(buffers) + " buffers per node (only single-buffer trees are supported)");
     r.skip(info.value_size, where + " background");
     const uint32_t tiles = r.read<uint32_t>(where + " root tile count");
     const uint32_t children = r.read<uint32_t>(where + " root child count");
@@ -232,8 +232,8 @@ void check_openvdb_grid(VdbByteReader& r, const VdbGridInfo& info) {
             skip_values(r, g, 512, count_on(mask), where + " voxel values");
         }
     if (r.pos() != info.end_pos)
-        r.fail(where + ": its data ends at byte " + str(r.pos()) + ", its descriptor says " +
-               str(info.end_pos));
+        r.fail(where + ": its data ends at byte " + decimal(r.pos()) + ", its descriptor says " +
+               decimal(info.end_pos));
     r.limit(info.end_pos, r.size(), "the file");
 }
 

@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string one_line(std::string s) {
+std::string obj_message_line(std::string s) {
     while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
     std::replace(s.begin(), s.end(), '\n', ';');
     return s;
@@ -108,8 +108,8 @@ void load_obj(const fs::path& path, Scene& scene, const Mat4& placement) {
     config.vertex_color = false;
     tinyobj::ObjReader reader;
     if (!reader.ParseFromString(obj_text, mtl_text, config))
-        throw Error(file + ": " + (reader.Error().empty() ? "cannot parse OBJ" : one_line(reader.Error())));
-    if (!reader.Warning().empty()) spdlog::warn("{}: {}", file, one_line(reader.Warning()));
+        throw Error(file + ": " + (reader.Error().empty() ? "cannot parse OBJ" : obj_message_line(reader.Error())));
+    if (!reader.Warning().empty()) spdlog::warn("{}: {}", file, obj_message_line(reader.Warning()));
 
     const auto& attrib = reader.GetAttrib();
     const fs::path dir = path.parent_path();

@@ -18,7 +18,6 @@ namespace npt::nerf {
 
 namespace {
 
-constexpr float k_two_pi = 6.28318530717959f;
 constexpr float k_golden = 0.6180339887498949f;
 constexpr int k_tries_per_point = 16;        // pixels drawn for a point before giving up on it
 constexpr size_t k_points_per_round = 2048;  // points whose light directions are marched together

@@ -17,9 +17,8 @@ namespace npt::nerf {
 
 namespace {
 
-constexpr size_t k_chunk = 128;            // points per parallel task; gradients summed in chunk order
+constexpr size_t k_points_per_task = 128;            // points per parallel task; gradients summed in chunk order
 constexpr float k_roughness_step = 0.01f;  // finite difference of the BSDF in roughness
-constexpr float k_two_pi = 6.28318530717959f;
 constexpr float k_prior_roughness = 0.5f;  // where RelightTrainSettings::roughness_prior pulls
 
 OptimizerConfig relight_optimizer(float lr) {
@@ -178,7 +177,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
 
     const int dims = m_layout.grid.output_dims();
     const MlpShape& shape = m_layout.mlp;
-    const size_t n_chunks = (batch + k_chunk - 1) / k_chunk;
+    const size_t n_chunks = (batch + k_points_per_task - 1) / k_points_per_task;
     const size_t mlp_params = shape.param_count();
     struct Chunk {
         std::vector<float> enc, out, d_out, d_enc, d_mlp, d_env, d_exposure;
@@ -193,7 +192,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
 
     tbb::parallel_for(size_t(0), n_chunks, [&](size_t c) {
         Chunk& ch = chunks[c];
-        const size_t b = c * k_chunk, n = std::min(k_chunk, batch - b);
+        const size_t b = c * k_points_per_task, n = std::min(k_points_per_task, batch - b);
         ch.enc.resize(n * dims);
         ch.out.resize(n * k_intrinsic_outputs);
         ch.d_out.assign(n * k_intrinsic_outputs, 0.0f);
@@ -378,7 +377,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
         for (size_t i = 0; i < n_env * 3; ++i) grads[m_env_offset + i] += ch.d_env[i];
         if (m_settings.learn_exposure)
             for (size_t i = 0; i < m_images; ++i) grads[m_exposure_offset + i] += ch.d_exposure[i];
-        const size_t b = c * k_chunk, n = std::min(k_chunk, batch - b);
+        const size_t b = c * k_points_per_task, n = std::min(k_points_per_task, batch - b);
         for (size_t i = 0; i < n; ++i)
             hash_encode_backward(m_layout.grid, m_layout.grid_position(at[b + i]), &ch.d_enc[i * dims],
                                  grads + m_layout.grid_offset);
