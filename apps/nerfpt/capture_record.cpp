@@ -13,7 +13,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr int k_record_version = 1;
-const char* const k_stage_order[] = {"curate", "poses", "object", "split", "train", "eval", "turntable"};
+const char* const k_stage_order[] = {"curate", "poses", "object", "split", "train", "eval", "isolate", "turntable"};
 
 double num(const nlohmann::json& j, const char* key) {
     const auto it = j.find(key);
@@ -122,6 +122,15 @@ std::string capture_report_markdown(const nlohmann::json& record) {
         md += fmt::format("| held-out views | {} frames: PSNR {:.2f} dB, SSIM {:.4f} (eval/) | {:.1f} s |\n",
                           e.value("views", 0), num(e, "psnr"), num(e, "ssim"), num(e, "seconds"));
         total += num(e, "seconds");
+    }
+    if (const auto i = get("isolate"); !i.empty()) {
+        md += fmt::format("| isolate | model.npt: the object alone, {} of {} occupied cells kept ({} outside the box or "
+                          "under the plane, {} in {} floaters){} | {:.1f} s |\n",
+                          i.value("occupied_after", 0), i.value("occupied_before", 0), i.value("cut_by_region", 0),
+                          i.value("cut_as_floaters", 0), i.value("floaters", 0),
+                          i.value("scene_model", "").empty() ? "" : "; the whole scene: model_scene.npt",
+                          num(i, "seconds"));
+        total += num(i, "seconds");
     }
     if (const auto v = get("turntable"); !v.empty()) {
         md += fmt::format("| turntable | {}, {} frames of {} | {:.1f} s |\n", v.value("file", ""),

@@ -28,6 +28,7 @@
 #include "input_checks.h"
 #include "interrupt.h"
 #include "nerf/model_file.h"
+#include "nerf/object_isolation.h"
 #include "object_stage.h"
 
 namespace npt::cli {
@@ -38,13 +39,14 @@ namespace {
 // Automatic --downscale: the training images' longest side at most this. A few minutes of CPU training
 // cannot resolve more detail, and smaller images load faster and take less memory.
 constexpr int k_auto_train_side = 400;
-constexpr int k_stages = 7;
-const char* const k_stage_names[k_stages] = {"curate", "poses", "object", "split", "train", "eval", "turntable"};
+constexpr int k_stages = 8;
+const char* const k_stage_names[k_stages] = {"curate", "poses", "object",  "split",
+                                             "train",  "eval",  "isolate", "turntable"};
 
 // What `--force` removes: only what capture itself writes, never the whole folder.
 const std::vector<std::string> k_outputs = {
     "frames",    "colmap", "transforms.json", "transforms_train.json", "transforms_test.json",
-    "model.npt", "eval",   "turntable.mp4",   "capture.json",          "report.md"};
+    "model.npt", "model_scene.npt", "eval", "turntable.mp4", "capture.json", "report.md"};
 
 class Clock {
   public:
@@ -81,7 +83,7 @@ int auto_downscale(int width, int height) {
 // A stage before training that runs again (new frames, poses or split) makes the model and what was rendered
 // from it stale: they go, so that training starts over instead of resuming a model of other data.
 void discard_trained(const fs::path& work, CaptureRecord& record) {
-    for (const char* name : {"model.npt", "eval", "turntable.mp4"}) {
+    for (const char* name : {"model.npt", "model_scene.npt", "eval", "turntable.mp4"}) {
         std::error_code ec;
         fs::remove_all(work / name, ec);
         if (ec) throw Error((work / name).string() + ": cannot remove (" + ec.message() + ")");
@@ -105,7 +107,11 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         "  5 train      -> model.npt (nerfpt train on the training frames, --train-time seconds; with\n"
         "                  --relightable also the relight stage)\n"
         "  6 eval       PSNR/SSIM on the held-out frames -> eval/ (renders, comparisons, metrics.json)\n"
-        "  7 turntable  -> turntable.mp4, an orbit at the capture's camera distance, height and field of "
+        "  7 isolate    when stage 3 found the object: model.npt keeps only it (nerfpt isolate: its box, above\n"
+        "                  the supporting plane, no floaters); --keep-scene keeps the whole scene as\n"
+        "                  model_scene.npt, which further training then continues (else it continues the\n"
+        "                  object's model, whose occupancy grid grows back where the network has density)\n"
+        "  8 turntable  -> turntable.mp4, an orbit at the capture's camera distance, height and field of "
         "view;\n"
         "                  the object alone (its box) when stage 3 found it\n"
         "and writes capture.json (every stage's numbers) and report.md after each stage. Run the same "
@@ -184,6 +190,9 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         ->capture_default_str();
     cmd->add_option("--turntable-res", args.turntable_res,
                     "WIDTHxHEIGHT of the turntable (default: the training size)");
+    cmd->add_flag("--keep-scene", args.keep_scene,
+                  "isolate: keep the whole-scene model (the room, the table) as model_scene.npt beside the "
+                  "object's model.npt");
     add_backend_option(cmd, args.backend);
     cmd->add_option("--threads", args.threads, "Worker threads, 0 = all hardware threads")
         ->check(CLI::Range(0, 4096));
@@ -249,7 +258,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         publish_stages(k);
     };
     const fs::path frames = work / "frames", transforms = work / "transforms.json",
-                   model = work / "model.npt";
+                   model = work / "model.npt", scene_model = work / "model_scene.npt";
     const std::string continue_hint =
         fmt::format("the same 'nerfpt capture {} -o {} ...' command", args.video, args.output);
 
@@ -371,6 +380,12 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         fs::exists(model, ec)) {
         stage(5, "train: done in an earlier run (model.npt)");
     } else {
+        // Training continues the whole scene where stage 7 kept it (the isolated model's grid would have to
+        // grow back), and stage 7 cuts the new model again.
+        if (fs::exists(scene_model, ec)) {
+            fs::rename(scene_model, model, ec);
+            if (ec) throw Error(scene_model.string() + ": cannot move it back to model.npt (" + ec.message() + ")");
+        }
         const bool resume = fs::exists(model, ec);
         stage(5,
                fmt::format("train: {}{}", resume ? "continuing model.npt to " : "",
@@ -446,21 +461,55 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                {"seconds", clock.seconds()}});
     }
 
-    // 7 turntable, at the training size by default (even: the video is yuv420p)
+    // 7 isolate, after eval: eval scores the whole scene against the held-out photos, which show the room.
+    const bool object_alone = object_frame_of_record(record.stage("object")).has_value();
+    if (!object_alone || !fs::exists(model, ec)) {
+        stage(7, "isolate: skipped (no object found: model.npt holds the whole scene)");
+    } else if (record.done("isolate")) {
+        stage(7, args.keep_scene && !fs::exists(scene_model, ec)
+                     ? "isolate: done in an earlier run without --keep-scene (the whole scene was not kept; "
+                       "--force starts over)"
+                     : "isolate: done in an earlier run");
+    } else {
+        stage(7, "isolate: the object alone in model.npt");
+        record.forget_from("isolate");  // and the turntable, which shows the model
+        const Clock clock;
+        nerf::NerfModel m = nerf::load_model(model);
+        const nerf::IsolationStats st = nerf::isolate_model(m, nerf::IsolationSettings{}, model.string());
+        if (args.keep_scene) {
+            fs::rename(model, scene_model, ec);  // a crash before the save below: stage 5 moves it back
+            if (ec) throw Error(model.string() + ": cannot rename it to model_scene.npt (" + ec.message() + ")");
+        }
+        nerf::save_model(model, m, /*with_training=*/true);
+        record.finish("isolate", {{"occupied_before", st.occupied_before},
+                                  {"occupied_after", st.occupied_after},
+                                  {"cut_by_region", st.cut_by_region},
+                                  {"cut_as_floaters", st.cut_as_floaters},
+                                  {"floaters", st.components - st.kept_components},
+                                  {"scene_model", args.keep_scene ? "model_scene.npt" : ""},
+                                  {"seconds", clock.seconds()}});
+        if (!global.quiet)
+            fmt::print("isolate: {} of {} occupied cells kept ({} outside the box or under the plane, {} in {} "
+                       "floaters){}\n",
+                       st.occupied_after, st.occupied_before, st.cut_by_region, st.cut_as_floaters,
+                       st.components - st.kept_components,
+                       args.keep_scene ? "; the whole scene is model_scene.npt" : "");
+    }
+
+    // 8 turntable, at the training size by default (even: the video is yuv420p)
     const std::string res = args.turntable_res.empty() ? fmt::format("{}x{}", (rig.width / downscale) & ~1,
                                                                      (rig.height / downscale) & ~1)
                                                        : args.turntable_res;
     const nlohmann::json& done_turntable = record.stage("turntable");
     // The object alone when the object stage found it (attach_object above gave the model its frame): the room
     // and the table are not in the video, and it renders several times faster.
-    const bool object_alone = object_frame_of_record(record.stage("object")).has_value();
     if (args.turntable_frames == 0) {
-        stage(7, "turntable: skipped (--turntable-frames 0)");
+        stage(8, "turntable: skipped (--turntable-frames 0)");
     } else if (record.done("turntable") && done_turntable.value("frames", 0) == args.turntable_frames &&
                done_turntable.value("res", "") == res && done_turntable.value("object", false) == object_alone) {
-        stage(7, "turntable: done in an earlier run (turntable.mp4)");
+        stage(8, "turntable: done in an earlier run (turntable.mp4)");
     } else {
-        stage(7, "turntable: rendering turntable.mp4");
+        stage(8, "turntable: rendering turntable.mp4");
         ViewArgs v;
         v.model = model.string();
         v.output = (work / "turntable.mp4").string();

@@ -32,6 +32,7 @@ struct CaptureArgs {
     int relight_points = 0;  // 0: the relight stage's default for the backend
     int relight_pixels = -1;  // borrowing pixels; -1: the relight stage's default for the backend
     double height_m = 0;  // the object's real height in metres; 0: the object frame stays in capture units
+    bool keep_scene = false;  // isolate: keep the whole-scene model as model_scene.npt
     // split, train, eval
     int holdout_every = 8;  // 0: train on every frame, no held-out PSNR
     double train_seconds = 600;

@@ -192,7 +192,7 @@ expect_error 2 "--threads" poses "$tmp/frames" -o "$tmp/transforms.json" --threa
 # capture: missing video, missing tools, a work folder that holds another video's capture, bad options.
 run capture --help
 for opt in --target-frames --matcher --poses-quality --holdout-every --train-time --train-steps --downscale \
-    --turntable-frames --force; do
+    --turntable-frames --keep-scene --force; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt capture --help does not mention $opt"
 done
 expect_error 1 "VIDEO.*no_such.mp4" capture "$tmp/no_such.mp4" -o "$tmp/cap"

@@ -102,7 +102,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
         EXPECT_EQ(last_state.value("phase", ""), "capture finished") << read_text(dir / "capture.log");
         EXPECT_TRUE(seen_running.count("poses") && seen_running.count("train"))
             << "stages seen running: " << nlohmann::json(seen_running).dump();
-        EXPECT_EQ(last_state["stages"].size(), 7u);
+        EXPECT_EQ(last_state["stages"].size(), 8u);
         for (const nlohmann::json& st : last_state["stages"]) EXPECT_EQ(st["state"], "done") << st.dump();
         EXPECT_EQ(last_train.value("step", 0), 20) << last_train.dump();
         EXPECT_TRUE(last_train.value("finished", false)) << last_train.dump();
@@ -114,7 +114,7 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
 
     const nlohmann::json record = read_json_file(work / "capture.json");
     const nlohmann::json& stages = record.at("stages");
-    for (const char* stage : {"curate", "poses", "object", "split", "train", "eval", "turntable"})
+    for (const char* stage : {"curate", "poses", "object", "split", "train", "eval", "isolate", "turntable"})
         EXPECT_TRUE(stages.contains(stage)) << "capture.json has no '" << stage << "' stage";
     const int kept = stages["curate"]["kept"].get<int>();  // a window whose best frame is blurry keeps none
     EXPECT_GE(kept, 70);
@@ -122,13 +122,18 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     EXPECT_GT(fs::file_size(work / "turntable.mp4"), 0u);
     EXPECT_NO_THROW(nerf::load_model(work / "model.npt"));
     EXPECT_TRUE(fs::exists(work / "report.md"));
+    // The isolate stage cut the room out of model.npt, and without --keep-scene kept no whole-scene model.
+    const nlohmann::json& isolated = stages["isolate"];
+    EXPECT_LT(isolated.value("occupied_after", -1), isolated.value("occupied_before", -1)) << isolated.dump();
+    EXPECT_GT(isolated.value("cut_by_region", 0), 0) << isolated.dump();
+    EXPECT_FALSE(fs::exists(work / "model_scene.npt"));
 
     // The same command again finds every stage done and changes nothing.
     const auto model_time = fs::last_write_time(work / "model.npt");
     const int rerun = run_cli(capture, dir / "rerun.log");
     ASSERT_EQ(rerun, 0) << read_text(dir / "rerun.log");
     const std::string rerun_log = read_text(dir / "rerun.log");
-    for (const char* stage : {"curate", "poses", "object", "split", "train", "eval", "turntable"})
+    for (const char* stage : {"curate", "poses", "object", "split", "train", "eval", "isolate", "turntable"})
         EXPECT_NE(rerun_log.find(std::string(stage) + ": done in an earlier run"), std::string::npos)
             << rerun_log;
     EXPECT_EQ(fs::last_write_time(work / "model.npt"), model_time);
@@ -138,7 +143,9 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     const uint64_t steps = nerf::load_model(work / "model.npt").training->adam.step;
     std::vector<std::string> relit = capture;
     // 64 points: on a model of 20 steps, whose density is still everywhere, 512 points' shadow rays took 98 s.
-    for (const char* a : {"--relightable", "--relight-steps", "20", "--relight-points", "64", "--relight-pixels", "256"})
+    // --keep-scene with it: the stage after training cuts the relit model again and keeps the whole scene.
+    for (const char* a : {"--relightable", "--relight-steps", "20", "--relight-points", "64", "--relight-pixels", "256",
+                          "--keep-scene"})
         relit.push_back(a);
     const int relit_rc = run_cli(relit, dir / "relight.log");
     ASSERT_EQ(relit_rc, 0) << read_text(dir / "relight.log");
@@ -146,6 +153,10 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     EXPECT_TRUE(relightable.relightable()) << read_text(dir / "relight.log");
     EXPECT_EQ(relightable.training->adam.step, steps);
     EXPECT_EQ(read_json_file(work / "capture.json")["stages"]["train"]["target"].value("relight_steps", 0), 20);
+    ASSERT_TRUE(fs::exists(work / "model_scene.npt")) << read_text(dir / "relight.log");
+    const nerf::NerfModel scene_model = nerf::load_model(work / "model_scene.npt");
+    EXPECT_TRUE(scene_model.relightable());
+    EXPECT_EQ(read_json_file(work / "capture.json")["stages"]["isolate"].value("scene_model", ""), "model_scene.npt");
 
     const auto estimate = capture::read_transforms_poses(work / "transforms.json");
     const auto truth = capture::read_transforms_poses(dir / "truth.json");
