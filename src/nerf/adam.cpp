@@ -1,6 +1,7 @@
-// Adam step over the whole parameter array. Every parameter's update depends only on its own gradient and
-// state, so any split into blocks gives bit-identical results; the fixed block size only keeps the TBB
-// scheduling overhead small against the ~40 flops per parameter.
+// Adam steps, dense over the whole parameter array or sparse over a hash grid's reached entries. Every
+// parameter's update depends only on its own gradient and state, so any split into blocks gives bit-identical
+// results; the fixed block size only keeps the TBB scheduling overhead small against the ~40 flops per
+// parameter.
 #include "nerf/adam.h"
 
 #include <tbb/blocked_range.h>
@@ -47,6 +48,33 @@ Adam::Adam(const OptimizerConfig& cfg, size_t param_count, size_t l2_begin, size
     m_state.m.assign(param_count, 0.0f);
     m_state.v.assign(param_count, 0.0f);
     m_state.ema.assign(param_count, 0.0f);
+    // ema_decay^k for the gaps lazy averages see most (0.95^256 ~ 2e-6: longer gaps are rare and exact anyway).
+    m_decay_pow.resize(256);
+    for (size_t k = 0; k < m_decay_pow.size(); ++k)
+        m_decay_pow[k] = float(std::pow(double(cfg.ema_decay), double(k)));
+}
+
+namespace {
+
+// What one step applies to every parameter it updates.
+struct StepConstants {
+    float b1, b2, eps, l2, correction1, correction2, lr, ema_decay;
+};
+
+// m, v and w of one parameter for gradient g (L2 already added); returns the new w.
+inline float adam_update(const StepConstants& k, float w, float g, float& m, float& v) {
+    m = k.b1 * m + (1.0f - k.b1) * g;
+    v = k.b2 * v + (1.0f - k.b2) * g * g;
+    const float m_hat = m * k.correction1;
+    const float v_hat = v * k.correction2;
+    return w - k.lr * m_hat / (std::sqrt(v_hat) + k.eps);
+}
+
+}  // namespace
+
+float Adam::ema_decay_pow(uint64_t k) const {
+    return k < m_decay_pow.size() ? m_decay_pow[k]
+                                  : float(std::pow(double(m_cfg.ema_decay), double(k)));
 }
 
 void Adam::step(float* params, const float* grads) {
@@ -54,14 +82,19 @@ void Adam::step(float* params, const float* grads) {
         throw Error("Adam: gradient of parameter " + std::to_string(bad) +
                     " is not finite (NaN or Inf) at step " + std::to_string(m_state.step) +
                     "; the training diverged (try a lower learning rate)");
+    sync_ema(params);  // lazily kept averages (step_sparse) first: this step updates every average
+    m_ema_step.clear();
 
     // Powers and corrections in double: beta2^t stays accurate over hundreds of thousands of steps.
     const double t = double(m_state.step + 1);
-    const float b1 = m_cfg.beta1, b2 = m_cfg.beta2, eps = m_cfg.epsilon, l2 = m_cfg.l2_reg;
-    const float correction1 = float(1.0 / (1.0 - std::pow(double(b1), t)));
-    const float correction2 = float(1.0 / (1.0 - std::pow(double(b2), t)));
-    const float lr = learning_rate_at(m_cfg, m_state.step);
-    const float ema_decay = m_cfg.ema_decay;
+    const StepConstants k{m_cfg.beta1,
+                          m_cfg.beta2,
+                          m_cfg.epsilon,
+                          m_cfg.l2_reg,
+                          float(1.0 / (1.0 - std::pow(double(m_cfg.beta1), t))),
+                          float(1.0 / (1.0 - std::pow(double(m_cfg.beta2), t))),
+                          learning_rate_at(m_cfg, m_state.step),
+                          m_cfg.ema_decay};
     float* m = m_state.m.data();
     float* v = m_state.v.data();
     float* ema = m_state.ema.data();
@@ -70,19 +103,118 @@ void Adam::step(float* params, const float* grads) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, m_count, k_block),
                       [&](const tbb::blocked_range<size_t>& r) {
                           for (size_t i = r.begin(); i < r.end(); ++i) {
-                              float w = params[i];
                               float g = grads[i];
-                              if (i >= l2_begin && i < l2_end) g += l2 * w;
-                              m[i] = b1 * m[i] + (1.0f - b1) * g;
-                              v[i] = b2 * v[i] + (1.0f - b2) * g * g;
-                              const float m_hat = m[i] * correction1;
-                              const float v_hat = v[i] * correction2;
-                              w -= lr * m_hat / (std::sqrt(v_hat) + eps);
+                              if (i >= l2_begin && i < l2_end) g += k.l2 * params[i];
+                              const float w = adam_update(k, params[i], g, m[i], v[i]);
                               params[i] = w;
-                              ema[i] = ema_decay * ema[i] + (1.0f - ema_decay) * w;
+                              ema[i] = k.ema_decay * ema[i] + (1.0f - k.ema_decay) * w;
                           }
                       });
     ++m_state.step;
+}
+
+void Adam::step_sparse(float* params, float* grads, const SparseEntries& sparse) {
+    const size_t es = size_t(std::max(sparse.entry_size, 1));
+    if (sparse.entry_size < 1 || sparse.begin < m_l2_end || sparse.begin > m_count ||
+        (m_count - sparse.begin) % es != 0 || (sparse.begin < m_count && !sparse.reached))
+        throw Error("Adam: the sparse range from parameter " + std::to_string(sparse.begin) + " in entries of " +
+                    std::to_string(sparse.entry_size) + " does not divide the " + std::to_string(m_count) +
+                    " parameters after the L2 range");
+    const size_t entries = (m_count - sparse.begin) / es;
+    if (!m_ema_step.empty() && (m_sparse_begin != sparse.begin || m_entry_size != int(es))) {
+        sync_ema(params);  // another split of the parameters: every average current, then tracked anew
+        m_ema_step.clear();
+    }
+    if (m_ema_step.empty()) {
+        m_sparse_begin = sparse.begin;
+        m_entry_size = int(es);
+        m_ema_step.assign(entries, uint32_t(m_state.step));
+    }
+    const uint8_t* reached = sparse.reached;
+
+    // Every gradient this step reads is finite, or nothing changes.
+    size_t bad = first_non_finite(grads, sparse.begin);
+    if (bad == sparse.begin) {
+        bad = tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, entries, k_block), m_count,
+            [&](const tbb::blocked_range<size_t>& r, size_t found) {
+                for (size_t e = r.begin(); e < r.end() && found == m_count; ++e)
+                    if (reached[e])
+                        for (size_t f = 0; f < es; ++f)
+                            if (!std::isfinite(grads[sparse.begin + e * es + f])) return sparse.begin + e * es + f;
+                return found;
+            },
+            [](size_t a, size_t b) { return std::min(a, b); });
+    }
+    if (bad < m_count)
+        throw Error("Adam: gradient of parameter " + std::to_string(bad) + " is not finite (NaN or Inf) at step " +
+                    std::to_string(m_state.step) + "; the training diverged (try a lower learning rate)");
+
+    const double t = double(m_state.step + 1);
+    const StepConstants k{m_cfg.beta1,
+                          m_cfg.beta2,
+                          m_cfg.epsilon,
+                          m_cfg.l2_reg,
+                          float(1.0 / (1.0 - std::pow(double(m_cfg.beta1), t))),
+                          float(1.0 / (1.0 - std::pow(double(m_cfg.beta2), t))),
+                          learning_rate_at(m_cfg, m_state.step),
+                          m_cfg.ema_decay};
+    float* m = m_state.m.data();
+    float* v = m_state.v.data();
+    float* ema = m_state.ema.data();
+    const size_t l2_begin = m_l2_begin, l2_end = m_l2_end;
+    // The dense part (the MLPs): every parameter, as step() does.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, sparse.begin, k_block),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i < r.end(); ++i) {
+                              float g = grads[i];
+                              if (i >= l2_begin && i < l2_end) g += k.l2 * params[i];
+                              const float w = adam_update(k, params[i], g, m[i], v[i]);
+                              params[i] = w;
+                              ema[i] = k.ema_decay * ema[i] + (1.0f - k.ema_decay) * w;
+                          }
+                      });
+    // The reached entries, in entry order (each entry's update is independent: any split is bit-identical).
+    const uint32_t now = uint32_t(m_state.step);  // steps done before this one
+    uint8_t* flags = sparse.reached;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, entries, k_block), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t e = r.begin(); e < r.end(); ++e) {
+            if (!flags[e]) continue;
+            flags[e] = 0;
+            // The average over the steps that did not visit this entry (its parameters did not change).
+            const float dk = ema_decay_pow(uint32_t(now - m_ema_step[e]));
+            m_ema_step[e] = now + 1;
+            for (size_t i = sparse.begin + e * es, end = i + es; i < end; ++i) {
+                float w = params[i];
+                const float g = grads[i];
+                const float average = dk * ema[i] + (1.0f - dk) * w;
+                if (g != 0.0f) {
+                    w = adam_update(k, w, g, m[i], v[i]);
+                    params[i] = w;
+                    grads[i] = 0.0f;
+                }
+                ema[i] = k.ema_decay * average + (1.0f - k.ema_decay) * w;
+            }
+        }
+    });
+    ++m_state.step;
+}
+
+void Adam::sync_ema(const float* params) {
+    if (m_ema_step.empty()) return;
+    const uint32_t now = uint32_t(m_state.step);
+    const size_t es = size_t(m_entry_size), begin = m_sparse_begin;
+    float* ema = m_state.ema.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_ema_step.size(), k_block),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t e = r.begin(); e < r.end(); ++e) {
+                              if (m_ema_step[e] == now) continue;
+                              const float dk = ema_decay_pow(uint32_t(now - m_ema_step[e]));
+                              m_ema_step[e] = now;
+                              for (size_t i = begin + e * es, end = i + es; i < end; ++i)
+                                  ema[i] = dk * ema[i] + (1.0f - dk) * params[i];
+                          }
+                      });
 }
 
 void Adam::averaged_params(const float* params, float* out) const {
@@ -92,9 +224,21 @@ void Adam::averaged_params(const float* params, float* out) const {
     }
     const float scale = float(1.0 / (1.0 - std::pow(double(m_cfg.ema_decay), double(m_state.step))));
     const float* ema = m_state.ema.data();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_count, k_block),
+    const size_t dense_end = m_ema_step.empty() ? m_count : m_sparse_begin;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, dense_end, k_block),
                       [&](const tbb::blocked_range<size_t>& r) {
                           for (size_t i = r.begin(); i < r.end(); ++i) out[i] = ema[i] * scale;
+                      });
+    if (m_ema_step.empty()) return;
+    const uint32_t now = uint32_t(m_state.step);
+    const size_t es = size_t(m_entry_size);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_ema_step.size(), k_block),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t e = r.begin(); e < r.end(); ++e) {
+                              const float dk = ema_decay_pow(uint32_t(now - m_ema_step[e]));
+                              for (size_t i = m_sparse_begin + e * es, end = i + es; i < end; ++i)
+                                  out[i] = (dk * ema[i] + (1.0f - dk) * params[i]) * scale;
+                          }
                       });
 }
 
@@ -109,6 +253,7 @@ void Adam::set_state(AdamState state) {
     check(state.v, "v");
     check(state.ema, "ema");
     m_state = std::move(state);
+    m_ema_step.clear();  // a stored state's averages are current
 }
 
 }  // namespace npt::nerf

@@ -72,7 +72,8 @@ void field_backward(const NerfLayout& layout, const float* params, const float* 
 }
 
 void accumulate_grid_gradient(const NerfLayout& layout, const std::vector<const Vec3*>& positions,
-                              const std::vector<const FieldBatch*>& chunks, float* d_params) {
+                              const std::vector<const FieldBatch*>& chunks, float* d_params,
+                              uint8_t* reached) {
     const HashGridConfig& cfg = layout.grid;
     const int nf = cfg.features_per_level, enc_dims = cfg.output_dims();
     float* d_grid = d_params + layout.grid_offset;
@@ -89,6 +90,9 @@ void accumulate_grid_gradient(const NerfLayout& layout, const std::vector<const 
                     float* g = d_grid + size_t(corners[k].index) * nf;
                     for (int f = 0; f < nf; ++f) g[f] += corners[k].weight * d_out[f];
                 }
+                // Levels own disjoint entry ranges, so the parallel levels never write one flag.
+                if (reached)
+                    for (int k = 0; k < 8; ++k) reached[corners[k].index] = 1;
             }
         }
     });

@@ -37,8 +37,10 @@ void field_backward(const NerfLayout& layout, const float* params, const float* 
                     FieldBatch& b, float* d_params);
 
 // d_params[grid range] += the hash-grid gradient of every chunk's samples: chunk c's positions[c][i] with
-// d_encoded chunks[c]->d_encoded. Parallel over levels (TBB); deterministic.
+// d_encoded chunks[c]->d_encoded. Parallel over levels (TBB); deterministic. reached (optional, one flag per
+// grid entry): set to 1 for every entry a sample's corner falls in (Adam::step_sparse visits only those).
 void accumulate_grid_gradient(const NerfLayout& layout, const std::vector<const Vec3*>& positions,
-                              const std::vector<const FieldBatch*>& chunks, float* d_params);
+                              const std::vector<const FieldBatch*>& chunks, float* d_params,
+                              uint8_t* reached = nullptr);
 
 }  // namespace npt::nerf

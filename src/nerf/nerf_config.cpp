@@ -233,6 +233,7 @@ NerfConfig config_from_json(const json& j, const std::string& source, const Nerf
         r.read_int("decay_interval", o.decay_interval, 1, k_int_max);
         r.read_float("decay_base", o.decay_base, 0.0, 1.0, true, false);
         r.read_float("ema_decay", o.ema_decay, 0.0, 1.0, false, true);
+        r.read_bool("sparse_grid", o.sparse_grid);
         r.check_no_unknown();
     }
     {
@@ -291,7 +292,8 @@ json config_to_json(const NerfConfig& c) {
                       {"decay_start", op.decay_start},
                       {"decay_interval", op.decay_interval},
                       {"decay_base", float_for_json(op.decay_base)},
-                      {"ema_decay", float_for_json(op.ema_decay)}};
+                      {"ema_decay", float_for_json(op.ema_decay)},
+                      {"sparse_grid", op.sparse_grid}};
     j["loss"] = {{"huber_delta", float_for_json(c.loss.huber_delta)},
                  {"surface_smoothness", float_for_json(c.loss.surface_smoothness)},
                  {"smoothness_spacing", float_for_json(c.loss.smoothness_spacing)},

@@ -58,6 +58,11 @@ struct OptimizerConfig {
     int decay_interval = 10000;   //   once step >= decay_start
     float decay_base = 0.33f;
     float ema_decay = 0.95f;      // evaluation uses the bias-corrected exponential moving average of parameters
+    // CPU trainer: a hash-grid parameter whose gradient is exactly zero this step (no sample reached its entry)
+    // keeps its value and moments, tiny-cuda-nn's rule for non-matrix parameters; the step then touches only
+    // the entries the batch reached instead of every one (docs/benchmarks.md, "Sparse Adam"). The CUDA trainer
+    // updates every parameter.
+    bool sparse_grid = true;
 };
 
 struct LossConfig {

@@ -49,7 +49,9 @@ Trainer::Trainer(NerfModel& model, const Dataset& data) try
     if (st.params.size() != m_layout.total) throw Error("the model's training state does not match its layout");
     if (st.adam.step > 0 || !st.adam.m.empty()) m_adam.set_state(st.adam);
     if (st.rays_per_step == 0) st.rays_per_step = k_initial_rays;
-    m_grads.resize(m_layout.total);
+    m_grads.assign(m_layout.total, 0.0f);
+    if (model.config.optimizer.sparse_grid)
+        m_reached.assign((m_layout.total - m_layout.grid_offset) / size_t(m_layout.grid.features_per_level), 0);
     // The grid's schedule counts instant-ngp steps of 2^18 samples: a smaller batch stretches it, so the grid
     // costs the same share of the training work (with 2^16 samples and every-16-steps updates, the grid
     // estimate would otherwise cost as much as training itself on a CPU).
@@ -66,6 +68,7 @@ Trainer::Trainer(NerfModel& model, const Dataset& data) try
 
 void Trainer::sync_model() {
     TrainingState& st = *m_model.training;
+    m_adam.sync_ema(st.params.data());
     st.adam = m_adam.state();
     m_model.params.resize(m_layout.total);
     m_adam.averaged_params(st.params.data(), m_model.params.data());
@@ -75,7 +78,7 @@ StepStats Trainer::step() {
     const auto t0 = std::chrono::steady_clock::now();
     StepStats stats = compute_gradient();
     TrainingState& st = *m_model.training;
-    const uint64_t step = m_adam.state().step;
+    const uint64_t step = m_adam.steps();
     auto lap = [last = std::chrono::steady_clock::now()]() mutable {
         const auto now = std::chrono::steady_clock::now();
         const double s = std::chrono::duration<double>(now - last).count();
@@ -84,9 +87,13 @@ StepStats Trainer::step() {
     };
 
     // 6. Adam, then the occupancy grid with the new parameters.
-    m_adam.step(st.params.data(), m_grads.data());
+    if (m_reached.empty())
+        m_adam.step(st.params.data(), m_grads.data());
+    else
+        m_adam.step_sparse(st.params.data(), m_grads.data(),
+                           SparseEntries{m_layout.grid_offset, m_layout.grid.features_per_level, m_reached.data()});
     stats.phases.adam = lap();
-    stats.step = m_adam.state().step;
+    stats.step = m_adam.steps();
     if (step % m_occupancy_interval == 0) {
         update_occupancy(step);
         stats.occupancy_updated = true;
@@ -102,6 +109,7 @@ StepStats Trainer::gradient(std::vector<float>& grads) {
     StepStats stats = compute_gradient();
     m_model.training->rays_per_step = rays;  // nothing changes: the next step sees the same batch
     grads = m_grads;
+    clear_grid_gradient();  // no Adam step follows to reset the reached entries
     return stats;
 }
 
@@ -116,7 +124,7 @@ StepStats Trainer::compute_gradient() try {
     StepStats stats;
     TrainingState& st = *m_model.training;
     const NerfConfig& cfg = m_model.config;
-    const uint64_t step = m_adam.state().step;
+    const uint64_t step = m_adam.steps();
     const uint64_t step_seed = mix64(cfg.training.seed ^ mix64(step + 1));
     // With the smoothness loss the rays come in whole groups (train_pixel.h).
     const bool grouped = cfg.loss.surface_smoothness > 0.0f;
@@ -207,6 +215,7 @@ StepStats Trainer::compute_gradient() try {
     std::vector<float> d_sigma(n_samples, 0.0f);
     std::vector<Rgb> d_rgb(n_samples);
     std::vector<double> ray_loss(n_kept), ray_se(n_kept);
+    std::vector<uint32_t> ray_used(n_kept);  // samples before the ray's early stop: those with a gradient
     const float inv_rays = 1.0f / float(std::max<size_t>(n_kept, 1));
     const float delta = cfg.loss.huber_delta;
     auto composite_ray = [&](size_t r) {
@@ -223,6 +232,7 @@ StepStats Trainer::compute_gradient() try {
         }
         ray_loss[r] = loss;
         ray_se[r] = se;
+        ray_used[r] = uint32_t(fwd.used);
         if (tr.count > 0)
             composite_backward(&sigma[tr.first], &rgb[tr.first], &dts[tr.first], int(tr.count), fwd,
                                tr.background, grad * inv_rays, &d_sigma[tr.first], &d_rgb[tr.first]);
@@ -270,7 +280,10 @@ StepStats Trainer::compute_gradient() try {
                        chunk_grads.data() + c * mlp_params);
     });
     float* grads = m_grads.data();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_layout.total, size_t(1) << 16),
+    // Sparse: the grid range is already zero (Adam::step_sparse resets the entries it visits), and only the
+    // MLPs' few parameters are cleared; dense: all of it.
+    const size_t cleared = m_reached.empty() ? m_layout.total : mlp_params;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, cleared, size_t(1) << 16),
                       [&](const tbb::blocked_range<size_t>& range) {
                           std::fill(grads + range.begin(), grads + range.end(), 0.0f);
                       });
@@ -285,7 +298,7 @@ StepStats Trainer::compute_gradient() try {
         chunk_ptr[c] = &chunks[c];
     }
     stats.phases.backward = lap();
-    accumulate_grid_gradient(m_layout, chunk_pos, chunk_ptr, grads);
+    accumulate_grid_gradient(m_layout, chunk_pos, chunk_ptr, grads, m_reached.empty() ? nullptr : m_reached.data());
     stats.phases.grid_backward = lap();
 
     // The next step's ray count aims at a full batch given this step's samples per ray.
@@ -294,9 +307,11 @@ StepStats Trainer::compute_gradient() try {
                                                    double(cfg.training.max_rays_per_batch)));
 
     double loss = 0, se = 0;
+    size_t n_used = 0;
     for (size_t r = 0; r < n_kept; ++r) {
         loss += ray_loss[r];
         se += ray_se[r];
+        n_used += ray_used[r];
     }
     stats.loss = n_kept ? loss / n_kept : 0.0;
     if (grouped) {
@@ -306,7 +321,7 @@ StepStats Trainer::compute_gradient() try {
     }
     stats.mse = n_kept ? se / (3.0 * n_kept) : 0.0;
     stats.rays = uint32_t(n_kept);
-    stats.samples = uint32_t(n_samples);
+    stats.samples = uint32_t(n_used);
     stats.marched = uint32_t(n_samples);
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return stats;
@@ -315,6 +330,20 @@ StepStats Trainer::compute_gradient() try {
         "a training step of " + std::to_string(m_model.config.training.batch_samples) +
         " samples needs more memory than this machine could allocate: lower training.batch_samples or "
         "training.max_rays_per_batch in the config");
+}
+
+void Trainer::clear_grid_gradient() {
+    if (m_reached.empty()) return;
+    const size_t nf = size_t(m_layout.grid.features_per_level);
+    float* grid = m_grads.data() + m_layout.grid_offset;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_reached.size(), size_t(1) << 16),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t e = r.begin(); e < r.end(); ++e)
+                              if (m_reached[e]) {
+                                  m_reached[e] = 0;
+                                  std::fill(grid + e * nf, grid + (e + 1) * nf, 0.0f);
+                              }
+                      });
 }
 
 void Trainer::update_occupancy(uint64_t step) {

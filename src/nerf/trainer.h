@@ -20,8 +20,8 @@ struct StepStats {
     double mse = 0;           // mean squared error per channel, for a training PSNR
     double smoothness = 0;    // mean surface-smoothness loss per group of rays (0 when it is off)
     uint32_t rays = 0;        // rays in the batch
-    uint32_t samples = 0;     // samples trained on (the CUDA trainer: those before each ray's early stop)
-    uint32_t marched = 0;     // samples marched and evaluated (CPU: the same as samples)
+    uint32_t samples = 0;     // samples trained on: those before each ray's early stop
+    uint32_t marched = 0;     // samples marched and evaluated (the CPU trainer evaluates them all)
     double seconds = 0;       // wall time of the step
     bool occupancy_updated = false;
     // Where the step's time went, for profiles and benchmarks.
@@ -38,7 +38,7 @@ public:
     Trainer(NerfModel& model, const Dataset& data);
 
     StepStats step();
-    uint64_t steps_done() const { return m_adam.state().step; }
+    uint64_t steps_done() const { return m_adam.steps(); }
     // The gradient step() would apply next (mean loss over the batch's rays, before L2), into grads (the
     // model's layout); the model and the optimizer do not change. For tests against the GPU trainer.
     StepStats gradient(std::vector<float>& grads);
@@ -49,13 +49,15 @@ public:
 private:
     StepStats compute_gradient();  // marching to the hash-grid backward: fills m_grads
     void update_occupancy(uint64_t step);
+    void clear_grid_gradient();  // the reached entries' gradients and flags back to zero (sparse_grid)
 
     NerfModel& m_model;
     const Dataset& m_data;
     NerfLayout m_layout;
     MarchParams m_march;
     Adam m_adam;
-    std::vector<float> m_grads;
+    std::vector<float> m_grads;  // with optimizer.sparse_grid, its grid range is zero between steps
+    std::vector<uint8_t> m_reached;  // per hash-grid entry: reached by this step's samples (sparse_grid)
     uint64_t m_occupancy_interval = 16;  // steps between occupancy updates
 };
 

@@ -1,10 +1,13 @@
 // Adam: one and three steps against values worked out from the formulas in double (L2 on a sub-range, a
-// learning-rate decay inside the three steps), the decay schedule, the EMA's bias correction, and the errors.
+// learning-rate decay inside the three steps), the decay schedule, the EMA's bias correction, and the errors;
+// the sparse step against a dense reference of tiny-cuda-nn's rule (a zero gradient in the sparse range leaves
+// the parameter and its moments alone; the average still moves every step).
 #include "nerf/adam.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -159,6 +162,148 @@ TEST(Adam, ManyBlocksMatchOneParameterAtATime) {
         for (int s = 0; s < 3; ++s) one.step(&wi, &g[i]);
         EXPECT_EQ(w[i], wi) << i;
     }
+}
+
+// The sparse step's reference: every parameter visited every step, in double; in the sparse range a zero
+// gradient skips m, v and w (not the average).
+struct DenseReference {
+    OptimizerConfig cfg;
+    size_t l2_begin, l2_end, sparse_begin;
+    std::vector<double> w, m, v, ema;
+    uint64_t step = 0;
+    void apply(const std::vector<float>& g) {
+        const double t = double(step + 1);
+        const double c1 = 1.0 / (1.0 - std::pow(double(cfg.beta1), t)), c2 = 1.0 / (1.0 - std::pow(double(cfg.beta2), t));
+        const double lr = learning_rate_at(cfg, step);
+        for (size_t i = 0; i < w.size(); ++i) {
+            double gi = g[i];
+            if (i >= sparse_begin && gi == 0.0) {
+                ema[i] = cfg.ema_decay * ema[i] + (1.0 - cfg.ema_decay) * w[i];
+                continue;
+            }
+            if (i >= l2_begin && i < l2_end) gi += cfg.l2_reg * w[i];
+            m[i] = cfg.beta1 * m[i] + (1.0 - cfg.beta1) * gi;
+            v[i] = cfg.beta2 * v[i] + (1.0 - cfg.beta2) * gi * gi;
+            w[i] -= lr * (m[i] * c1) / (std::sqrt(v[i] * c2) + cfg.epsilon);
+            ema[i] = cfg.ema_decay * ema[i] + (1.0 - cfg.ema_decay) * w[i];
+        }
+        ++step;
+    }
+};
+
+// Gradients for step s: the four dense parameters always; of the sparse entries (two features each) about a
+// third reached, some of those with one or both features exactly zero (a corner of zero weight).
+std::vector<float> sparse_test_gradient(int s, size_t n, size_t sparse_begin, std::vector<uint8_t>& reached) {
+    std::vector<float> g(n, 0.0f);
+    for (size_t i = 0; i < sparse_begin; ++i) g[i] = 0.1f * std::sin(float(i + 7 * s));
+    for (size_t e = 0; e < reached.size(); ++e) {
+        const uint32_t h = uint32_t(e * 2654435761u) ^ uint32_t(s * 40503u);
+        if (h % 3 != 0) continue;
+        reached[e] = 1;
+        for (size_t f = 0; f < 2; ++f)
+            if ((h >> (4 + f)) % 5 != 0) g[sparse_begin + 2 * e + f] = 0.01f * std::cos(float(e + 3 * f + s));
+    }
+    return g;
+}
+
+TEST(Adam, SparseStepsMatchTheDenseRuleOfTinyCudaNn) {
+    // 4 MLP parameters (L2 on [1, 3)) and 40 000 entries of 2 (several TBB blocks); 12 steps through a
+    // learning-rate decay. Parameters and moments follow the same float arithmetic as a dense step, so they
+    // match the double reference to float rounding; the average is brought up to date lazily (ema_decay^k in
+    // one multiplication instead of k), which agrees to a few float ulps of its order-1 values.
+    OptimizerConfig cfg = test_config();
+    cfg.decay_start = 6;
+    cfg.decay_interval = 3;
+    const size_t sparse_begin = 4, entries = 40000, n = sparse_begin + 2 * entries;
+    Adam adam(cfg, n, 1, 3);
+    DenseReference ref{cfg, 1, 3, sparse_begin, {}, std::vector<double>(n, 0.0), std::vector<double>(n, 0.0),
+                       std::vector<double>(n, 0.0)};
+    std::vector<float> w(n);
+    for (size_t i = 0; i < n; ++i) w[i] = 0.5f * std::sin(float(i));
+    ref.w.assign(w.begin(), w.end());
+    std::vector<uint8_t> reached(entries, 0);
+    for (int s = 0; s < 12; ++s) {
+        std::vector<float> g = sparse_test_gradient(s, n, sparse_begin, reached);
+        ref.apply(g);
+        adam.step_sparse(w.data(), g.data(), SparseEntries{sparse_begin, 2, reached.data()});
+        // The step hands back a zero gradient and no flags, ready for the next accumulation.
+        for (size_t i = sparse_begin; i < n; ++i) ASSERT_EQ(g[i], 0.0f) << "step " << s << ", parameter " << i;
+        for (size_t e = 0; e < entries; ++e) ASSERT_EQ(reached[e], 0) << "step " << s << ", entry " << e;
+    }
+    EXPECT_EQ(adam.steps(), 12u);
+    std::vector<float> avg(n);
+    adam.averaged_params(w.data(), avg.data());
+    const double scale = 1.0 / (1.0 - std::pow(double(cfg.ema_decay), 12.0));
+    size_t never_moved = 0;
+    for (size_t i = 0; i < n; ++i) {
+        ASSERT_NEAR(w[i], ref.w[i], 1e-6) << i;
+        ASSERT_NEAR(avg[i], ref.ema[i] * scale, 2e-6) << i;
+        never_moved += i >= sparse_begin && w[i] == float(0.5f * std::sin(float(i)));
+    }
+    EXPECT_GT(never_moved, 1000u) << "some sparse parameters were never reached with a gradient";
+    // sync_ema makes the stored averages the dense ones (what a model file keeps).
+    adam.sync_ema(w.data());
+    for (size_t i = 0; i < n; ++i) ASSERT_NEAR(adam.state().ema[i], ref.ema[i], 2e-6) << i;
+}
+
+TEST(Adam, SparseResumeAndDenseStepsContinueTheSameRun) {
+    // Sparse steps, the state saved (after sync_ema) into a fresh optimizer, more sparse steps: the same
+    // parameters bit for bit as the optimizer that went on; a dense step after sparse ones updates every
+    // average as if each had been kept every step.
+    const size_t sparse_begin = 4, entries = 5000, n = sparse_begin + 2 * entries;
+    std::vector<float> wa(n, 0.25f);
+    Adam a(test_config(), n, 1, 3);
+    std::vector<uint8_t> reached(entries, 0);
+    for (int s = 0; s < 3; ++s) {
+        std::vector<float> g = sparse_test_gradient(s, n, sparse_begin, reached);
+        a.step_sparse(wa.data(), g.data(), SparseEntries{sparse_begin, 2, reached.data()});
+    }
+    a.sync_ema(wa.data());
+    Adam b(test_config(), n, 1, 3);
+    b.set_state(a.state());
+    std::vector<float> wb = wa;
+    for (int s = 3; s < 6; ++s) {
+        std::vector<float> g = sparse_test_gradient(s, n, sparse_begin, reached);
+        std::vector<uint8_t> reached_b = reached;
+        std::vector<float> gb = g;
+        a.step_sparse(wa.data(), g.data(), SparseEntries{sparse_begin, 2, reached.data()});
+        b.step_sparse(wb.data(), gb.data(), SparseEntries{sparse_begin, 2, reached_b.data()});
+    }
+    EXPECT_EQ(wa, wb);
+    std::vector<float> avg_a(n), avg_b(n);
+    a.averaged_params(wa.data(), avg_a.data());
+    b.averaged_params(wb.data(), avg_b.data());
+    EXPECT_EQ(avg_a, avg_b);
+    // A dense step after sparse ones: every average takes this step's parameters, from the caught-up value.
+    std::vector<float> zero(n, 0.0f);
+    a.sync_ema(wa.data());
+    const std::vector<float> ema_before = a.state().ema;
+    a.step(wa.data(), zero.data());
+    for (size_t i : {size_t(5), size_t(777), n - 1})
+        EXPECT_NEAR(a.state().ema[i], 0.95 * ema_before[i] + 0.05 * wa[i], 1e-6) << i;
+}
+
+TEST(Adam, SparseNonFiniteGradientThrowsAndChangesNothing) {
+    const size_t sparse_begin = 4, entries = 100, n = sparse_begin + 2 * entries;
+    Adam adam(test_config(), n, 1, 3);
+    std::vector<float> w(n, 0.5f), g(n, 0.0f);
+    std::vector<uint8_t> reached(entries, 0);
+    reached[10] = reached[60] = 1;
+    g[sparse_begin + 2 * 10] = 0.1f;
+    g[sparse_begin + 2 * 60 + 1] = std::numeric_limits<float>::quiet_NaN();
+    const std::vector<float> w_before = w;
+    test::expect_error_message(
+        [&] { adam.step_sparse(w.data(), g.data(), SparseEntries{sparse_begin, 2, reached.data()}); },
+        {"gradient", "parameter " + std::to_string(sparse_begin + 2 * 60 + 1), "not finite"});
+    EXPECT_EQ(w, w_before);
+    EXPECT_EQ(adam.steps(), 0u);
+    EXPECT_EQ(reached[10], 1);  // nothing was consumed either
+    // A range that does not divide into entries, or that overlaps the L2 range, is refused.
+    test::expect_error_message(
+        [&] { adam.step_sparse(w.data(), g.data(), SparseEntries{sparse_begin + 1, 2, reached.data()}); },
+        {"sparse range", "does not divide"});
+    test::expect_error_message(
+        [&] { adam.step_sparse(w.data(), g.data(), SparseEntries{2, 2, reached.data()}); }, {"sparse range"});
 }
 
 }  // namespace
