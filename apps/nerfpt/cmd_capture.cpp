@@ -475,8 +475,11 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         record.forget_from("isolate");  // and the turntable, which shows the model
         const Clock clock;
         nerf::NerfModel m = nerf::load_model(model);
+        // Cut before and not trained since (e.g. only the relight stage ran): there is no whole scene to keep.
+        const bool was_isolated = m.object && m.object->object_only;
+        const bool keep = args.keep_scene && !was_isolated;
         const nerf::IsolationStats st = nerf::isolate_model(m, nerf::IsolationSettings{}, model.string());
-        if (args.keep_scene) {
+        if (keep) {
             fs::rename(model, scene_model, ec);  // a crash before the save below: stage 5 moves it back
             if (ec) throw Error(model.string() + ": cannot rename it to model_scene.npt (" + ec.message() + ")");
         }
@@ -486,14 +489,17 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                   {"cut_by_region", st.cut_by_region},
                                   {"cut_as_floaters", st.cut_as_floaters},
                                   {"floaters", st.components - st.kept_components},
-                                  {"scene_model", args.keep_scene ? "model_scene.npt" : ""},
+                                  {"scene_model", keep ? "model_scene.npt" : ""},
                                   {"seconds", clock.seconds()}});
         if (!global.quiet)
             fmt::print("isolate: {} of {} occupied cells kept ({} outside the box or under the plane, {} in {} "
                        "floaters){}\n",
                        st.occupied_after, st.occupied_before, st.cut_by_region, st.cut_as_floaters,
                        st.components - st.kept_components,
-                       args.keep_scene ? "; the whole scene is model_scene.npt" : "");
+                       keep               ? "; the whole scene is model_scene.npt"
+                       : args.keep_scene ? "; --keep-scene: model.npt was isolated in an earlier run without it, "
+                                           "so the whole scene is gone (--force starts over)"
+                                         : "");
     }
 
     // 8 turntable, at the training size by default (even: the video is yuv420p)

@@ -271,6 +271,8 @@ void print_object(const nerf::NerfModel& m) {
                vec(o.transform_point(Vec3(0.0f))), vec(up), f.units_per_world(), f.metric ? "metres" : "units");
     fmt::print("  a volume cube with this model and an identity node stands it on y = 0 at the origin (Y up){}\n",
                f.metric ? ", at its real size" : " (no --height was given: capture units, not metres)");
+    if (f.object_only)
+        fmt::print("  isolated (nerfpt isolate): the object alone; eval and view show only its box, as a scene does\n");
 }
 
 // A model file: what it is, how far it was trained, and where its content lies (to place it in a scene).

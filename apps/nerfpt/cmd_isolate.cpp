@@ -16,19 +16,19 @@ CLI::App* add_isolate_command(CLI::App& app, IsolateArgs& args) {
         "isolate",
         "Keep only the captured object in a model: its box, above the supporting plane, no floaters");
     cmd->footer(
-        "The model must carry an object frame (`nerfpt capture` stores it). Every occupancy cell outside "
-        "the\n"
-        "object's box or less than --plane-margin cells above the supporting plane is emptied, then every\n"
-        "26-connected component of occupied cells but the largest with fewer than --min-component cells. "
-        "Renders\n"
-        "skip empty cells, so the table, the props and the floaters vanish; the network is unchanged. "
-        "Training\n"
-        "the result further re-estimates the grid and undoes the cut.");
+        "The model must carry an object frame (`nerfpt capture` stores it). Every occupancy cell that does not\n"
+        "overlap the object's box, or lies wholly below --plane-margin cells above the supporting plane, is\n"
+        "emptied, then every 26-connected component of occupied cells but the largest with fewer than\n"
+        "--min-component cells. Renders skip empty cells, so the table, the props and the floaters vanish, and\n"
+        "the model is marked object-only: eval and view then show only what lies in its box, cut exactly at\n"
+        "the box and the plane (as --object does, and as a scene's \"placement\": \"object\" always does).\n"
+        "The network is unchanged. Training the result further re-estimates the grid and clears the mark.");
     cmd->add_option("model", args.model, "Model file (.npt) with an object frame")->required();
     cmd->add_option("-o,--output", args.output, "Where to write the isolated model (may be the input)")
         ->required();
     cmd->add_option("--plane-margin", args.settings.plane_margin_cells,
-                    "Cells (of the finest cascade) above the supporting plane that go too")
+                    "Cells wholly below this height above the supporting plane go, in cells of the finest cascade "
+                    "(0: those straddling the plane stay; renders cut at the plane exactly)")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--min-component", args.settings.min_component_cells,

@@ -235,6 +235,11 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     std::unique_ptr<nerf::TrainerBackend> trainer_ptr = nerf::make_trainer(backend, model, data);
     nerf::TrainerBackend& trainer = *trainer_ptr;
     spdlog::info("training on {}", trainer.device());
+    // Training re-estimates the occupancy grid: an isolated model's cut (nerfpt isolate) no longer holds, and
+    // its renders show the whole model again.
+    if (model.object && trainer.steps_done() < target_steps &&
+        (args.seconds <= 0 || model.training->elapsed_seconds < args.seconds))
+        model.object->object_only = false;
     // A GPU step takes milliseconds: writing a checkpoint (hundreds of MB) every interval of steps would cost
     // more than the training, so without an explicit --checkpoint-every a GPU saves at most once a minute.
     const double min_checkpoint_seconds =

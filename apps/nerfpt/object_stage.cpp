@@ -192,7 +192,9 @@ ObjectAttach attach_object(const fs::path& path, nlohmann::json& record, double 
                                          d.cells)
                            : "object: the model has no dense cell inside the first box; the first box stays";
     }
-    const auto frame = object_frame_of_record(record);
+    auto frame = object_frame_of_record(record);
+    // The record holds where the object is; whether the model was isolated since is the model's own.
+    if (frame && m.object) frame->object_only = m.object->object_only;
     if (frame && !(m.object && nerf::object_frame_to_json(*m.object) == nerf::object_frame_to_json(*frame))) {
         m.object = frame;
         nerf::save_model(path, m, /*with_training=*/true);

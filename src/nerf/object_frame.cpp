@@ -47,10 +47,13 @@ nlohmann::json object_frame_to_json(const ObjectFrame& f) {
     nlohmann::json m = nlohmann::json::array();
     for (const auto& row : f.object_to_world.m)
         for (const double x : row) m.push_back(x);
-    return {{"version", k_object_frame_version},
-            {"object_to_world", m},
-            {"box", {{"min", {f.box_min.x, f.box_min.y, f.box_min.z}}, {"max", {f.box_max.x, f.box_max.y, f.box_max.z}}}},
-            {"metric", f.metric}};
+    nlohmann::json j = {
+        {"version", k_object_frame_version},
+        {"object_to_world", m},
+        {"box", {{"min", {f.box_min.x, f.box_min.y, f.box_min.z}}, {"max", {f.box_max.x, f.box_max.y, f.box_max.z}}}},
+        {"metric", f.metric}};
+    if (f.object_only) j["object_only"] = true;
+    return j;
 }
 
 ObjectFrame object_frame_from_json(const nlohmann::json& j, const std::string& where) {
@@ -88,6 +91,10 @@ ObjectFrame object_frame_from_json(const nlohmann::json& j, const std::string& w
     if (j.contains("metric")) {
         if (!j["metric"].is_boolean()) throw Error(where + ": 'metric': expected true or false");
         f.metric = j["metric"].get<bool>();
+    }
+    if (j.contains("object_only")) {
+        if (!j["object_only"].is_boolean()) throw Error(where + ": 'object_only': expected true or false");
+        f.object_only = j["object_only"].get<bool>();
     }
     return f;
 }

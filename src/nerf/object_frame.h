@@ -21,12 +21,17 @@ struct ObjectFrame {
     Mat4 object_to_world;
     Vec3 box_min{-0.5f, -0.5f, 0.0f}, box_max{0.5f, 0.5f, 1.0f};  // the object's box, object space
     bool metric = false;  // object units are metres; else the capture's units
+    // Renders of the model show only what lies in the box (eval and view as with --object; scenes cut it with
+    // "placement": "object" anyway): set by `nerfpt isolate`, whose occupancy cut keeps the cells that straddle
+    // the box and the supporting plane, so that the exact cut is the renderer's. Training clears it.
+    bool object_only = false;
     // Object units per training-world unit (the similarity's scale, inverted).
     double units_per_world() const;
 };
 
 // The OBJF section's JSON: {"version": 1, "object_to_world": [16 numbers, row-major], "box": {"min": [x, y, z],
-// "max": [x, y, z]}, "metric": bool}.
+// "max": [x, y, z]}, "metric": bool, "object_only": bool}; object_only is written only when true (older readers
+// ignore it).
 nlohmann::json object_frame_to_json(const ObjectFrame& frame);
 // Throws npt::Error "WHERE: FIELD: what is wrong" for another version, missing or non-finite numbers, an empty
 // box, or an object_to_world that is not a proper similarity.

@@ -31,10 +31,13 @@ IsolationStats isolate_object(std::vector<float>& density, const IsolationInput&
     const float mean = float(sum / double(density.size()));
     const float threshold = std::min(in.occupied_threshold, mean);
 
-    // Object space: z is the height above the plane. A model-space cell of side h spans, along object z, the
-    // row-2 extent h * (|r20| + |r21| + |r22|); its lowest point is the centre's height minus half that.
-    const Vec3 up_row = row_of(in.model_to_object, 2);
-    const float z_extent_per_model_unit = std::fabs(up_row.x) + std::fabs(up_row.y) + std::fabs(up_row.z);
+    // Object space: z is the height above the plane. A model-space cell of side h spans, along object axis a,
+    // h * (|ra0| + |ra1| + |ra2|) (row a of the map).
+    Vec3 extent;
+    for (int a = 0; a < 3; ++a) {
+        const Vec3 r = row_of(in.model_to_object, a);
+        extent[a] = std::fabs(r.x) + std::fabs(r.y) + std::fabs(r.z);
+    }
     const float object_per_model = std::sqrt(float(in.model_to_object.m[0][0] * in.model_to_object.m[0][0] +
                                                    in.model_to_object.m[1][0] * in.model_to_object.m[1][0] +
                                                    in.model_to_object.m[2][0] * in.model_to_object.m[2][0]));
@@ -56,9 +59,13 @@ IsolationStats isolate_object(std::vector<float>& density, const IsolationInput&
                     const Vec3 centre{lo + (float(x) + 0.5f) * h, lo + (float(y) + 0.5f) * h,
                                       lo + (float(z) + 0.5f) * h};
                     const Vec3 o = in.model_to_object.transform_point(centre);
-                    const float lowest = o.z - 0.5f * h * z_extent_per_model_unit;
-                    const bool inside = lowest >= z_floor && o.x >= in.box_min.x && o.x <= in.box_max.x &&
-                                        o.y >= in.box_min.y && o.y <= in.box_max.y && o.z <= in.box_max.z;
+                    // Cells that overlap the region stay (their bounding extent in object space): the exact
+                    // cut at the box's faces and the plane is the renderer's (the model is marked
+                    // object_only), so no part of the object's base or sides is lost with a straddling cell.
+                    const Vec3 half = extent * (0.5f * h);
+                    const bool inside = o.z + half.z >= z_floor && o.x + half.x >= in.box_min.x &&
+                                        o.x - half.x <= in.box_max.x && o.y + half.y >= in.box_min.y &&
+                                        o.y - half.y <= in.box_max.y && o.z - half.z <= in.box_max.z;
                     in_region[i] = inside;
                     if (occupied && !inside) ++st.cut_by_region;
                 }
@@ -131,6 +138,7 @@ IsolationStats isolate_model(NerfModel& model, const IsolationSettings& s, const
     std::vector<float> density = model.occupancy.density();
     const IsolationStats st = isolate_object(density, in, s);
     model.occupancy.set_density(std::move(density), in.occupied_threshold);
+    model.object->object_only = true;  // the exact cut (the box, the plane) is the renderer's
     return st;
 }
 

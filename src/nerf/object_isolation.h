@@ -1,6 +1,8 @@
-// The object alone in its model (issue 25): the occupancy grid cut to the object's box, above its supporting
-// plane, and cleared of floaters (small connected components), so that every march skips the table, the props
-// and the floaters. Works on the grid's densities alone; the network is untouched.
+// The object alone in its model (issue 25): the occupancy grid cut to the cells that overlap the object's box
+// above its supporting plane, and cleared of floaters (small connected components), so that every march skips
+// the table, the props and the floaters; the model is marked object_only, so that renders cut exactly at the
+// box and the plane (object_frame.h). Works on the grid's densities and the object frame; the network is
+// untouched.
 #pragma once
 
 #include <cstdint>
@@ -14,10 +16,10 @@
 namespace npt::nerf {
 
 struct IsolationSettings {
-    // Cells whose lowest point lies less than this many cells (of cascade 0) above the supporting plane go (a
-    // cell touching the plane at all goes with 0). 0: on the seed-7 dev capture one cell more cut the base
-    // and cost 0.018 IoU while lowering the leak by only 0.009 points (docs/benchmarks.md, "The object
-    // alone").
+    // Cells lying wholly below this many cells (of cascade 0) above the supporting plane go; 0: the cells that
+    // straddle the plane stay, and the renderer cuts at the plane exactly (the model is marked object_only).
+    // Cutting the straddling cells lost up to a cell of the object's base (docs/benchmarks.md, "The object
+    // alone: an exact cut").
     double plane_margin_cells = 0.0;
     // A component of occupied cells not the largest one is kept only with at least this many cells. 8 = 2^3:
     // the grid resolves a feature only with two cells per axis (sampling), so a smaller component is below

@@ -31,6 +31,7 @@ struct RayState {
 }  // namespace
 
 ObjectCut view_object_cut(const NerfModel& model, const ViewOptions& options) {
+    if (model.object && model.object->object_only) return object_cut(*model.object, model.world_to_model);
     if (!options.object_only) return ObjectCut{};
     if (!model.object)
         throw Error("render_view: only the object was asked for, and the model has no object frame (made by "

@@ -23,8 +23,9 @@ struct ViewOptions {
     bool object_only = false;
 };
 
-// The object test a view renderer applies for `options` (inactive unless object_only). Throws npt::Error when
-// object_only is asked of a model without an object frame.
+// The object test a view renderer applies for `options`: active with object_only, or for a model whose object
+// frame says object_only (an isolated model, object_frame.h). Throws npt::Error when object_only is asked of a
+// model without an object frame.
 ObjectCut view_object_cut(const NerfModel& model, const ViewOptions& options);
 
 // Returns an RGBA image: colour composited over the background, as the training images store it (sRGB-encoded

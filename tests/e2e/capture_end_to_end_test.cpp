@@ -78,7 +78,8 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
                                               "--holdout-every",
                                               "24",
                                               "--config",
-                                              (dir / "small.json").string()};
+                                              (dir / "small.json").string(),
+                                              "--keep-scene"};
     // The first run serves its page (--serve): a page connected while it runs sees the long stages running,
     // the training's status, and at the end every stage done; then the page stays up until Ctrl-C.
     std::vector<std::string> served = capture;
@@ -122,11 +123,15 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     EXPECT_GT(fs::file_size(work / "turntable.mp4"), 0u);
     EXPECT_NO_THROW(nerf::load_model(work / "model.npt"));
     EXPECT_TRUE(fs::exists(work / "report.md"));
-    // The isolate stage cut the room out of model.npt, and without --keep-scene kept no whole-scene model.
+    // The isolate stage cut the room out of model.npt and, with --keep-scene, kept the whole scene beside it.
     const nlohmann::json& isolated = stages["isolate"];
     EXPECT_LT(isolated.value("occupied_after", -1), isolated.value("occupied_before", -1)) << isolated.dump();
     EXPECT_GT(isolated.value("cut_by_region", 0), 0) << isolated.dump();
-    EXPECT_FALSE(fs::exists(work / "model_scene.npt"));
+    EXPECT_EQ(isolated.value("scene_model", ""), "model_scene.npt");
+    EXPECT_TRUE(nerf::load_model(work / "model.npt").object.value_or(nerf::ObjectFrame{}).object_only)
+        << "the isolated model renders its object alone";
+    ASSERT_TRUE(fs::exists(work / "model_scene.npt"));
+    EXPECT_FALSE(nerf::load_model(work / "model_scene.npt").object.value_or(nerf::ObjectFrame{}).object_only);
 
     // The same command again finds every stage done and changes nothing.
     const auto model_time = fs::last_write_time(work / "model.npt");
@@ -143,9 +148,8 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     const uint64_t steps = nerf::load_model(work / "model.npt").training->adam.step;
     std::vector<std::string> relit = capture;
     // 64 points: on a model of 20 steps, whose density is still everywhere, 512 points' shadow rays took 98 s.
-    // --keep-scene with it: the stage after training cuts the relit model again and keeps the whole scene.
-    for (const char* a : {"--relightable", "--relight-steps", "20", "--relight-points", "64", "--relight-pixels", "256",
-                          "--keep-scene"})
+    // The relight stage runs on the whole scene (model_scene.npt moves back), then isolate cuts it again.
+    for (const char* a : {"--relightable", "--relight-steps", "20", "--relight-points", "64", "--relight-pixels", "256"})
         relit.push_back(a);
     const int relit_rc = run_cli(relit, dir / "relight.log");
     ASSERT_EQ(relit_rc, 0) << read_text(dir / "relight.log");
@@ -156,6 +160,8 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     ASSERT_TRUE(fs::exists(work / "model_scene.npt")) << read_text(dir / "relight.log");
     const nerf::NerfModel scene_model = nerf::load_model(work / "model_scene.npt");
     EXPECT_TRUE(scene_model.relightable());
+    EXPECT_FALSE(scene_model.object.value_or(nerf::ObjectFrame{}).object_only);
+    EXPECT_TRUE(relightable.object.value_or(nerf::ObjectFrame{}).object_only);
     EXPECT_EQ(read_json_file(work / "capture.json")["stages"]["isolate"].value("scene_model", ""), "model_scene.npt");
 
     const auto estimate = capture::read_transforms_poses(work / "transforms.json");

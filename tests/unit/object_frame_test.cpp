@@ -64,7 +64,12 @@ TEST(ObjectFrame, SectionRoundTripsAndOldModelsHaveNone) {
     EXPECT_EQ(back.object->box_min.y, -0.15f);
     EXPECT_EQ(back.object->box_max.z, 0.3f);
     EXPECT_TRUE(back.object->metric);
+    EXPECT_FALSE(back.object->object_only);
+    EXPECT_FALSE(object_frame_to_json(*back.object).contains("object_only"));  // older readers see what they know
     EXPECT_NEAR(back.object->units_per_world(), 0.4, 1e-12);
+    m.object->object_only = true;  // an isolated model
+    save_model(dir / "isolated.npt", m, false);
+    EXPECT_TRUE(load_model(dir / "isolated.npt").object->object_only);
 }
 
 TEST(ObjectFrame, BadSectionsAreOneLineErrors) {
@@ -88,6 +93,8 @@ TEST(ObjectFrame, BadSectionsAreOneLineErrors) {
     nlohmann::json empty_box = good;
     empty_box["box"]["max"][2] = 0.0;
     test::expect_error_message([&] { object_frame_from_json(empty_box, where); }, {"'box'", "max must exceed"});
+    test::expect_error_message([&] { object_frame_from_json(with("object_only", "yes"), where); },
+                               {where, "'object_only'", "true or false"});
     nlohmann::json nan = good;
     nan["box"]["min"][0] = "x";
     test::expect_error_message([&] { object_frame_from_json(nan, where); }, {"'min'", "finite"});
@@ -254,6 +261,11 @@ TEST(ObjectFrame, TheViewRendererCanSeeTheObjectAlone) {
     EXPECT_GT(alpha(all, 4, 4), alpha(alone, 4, 4) + 0.1f);
     EXPECT_GT(alpha(all, 0, 0), 0.1f);
     EXPECT_EQ(alpha(alone, 0, 0), 0.0f);
+    // A model marked object_only (an isolated one) renders its object alone without being asked.
+    NerfModel isolated = model;
+    isolated.object->object_only = true;
+    const Image marked = render_view(isolated, cam, whole);
+    EXPECT_EQ(marked.pixels, alone.pixels);
     // A model without an object frame cannot be asked for its object.
     NerfModel plain = zero_model();
     test::expect_error_message([&] { render_view(plain, cam, object); }, {"no object frame"});

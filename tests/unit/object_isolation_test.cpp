@@ -33,7 +33,9 @@ bool in_blob(Vec3 p) { return dist(p, {0.5f, 0.5f, 0.5f}) < 0.1f; }
 bool in_floater(Vec3 p) {
     return dist(p, {8.5f / 32, 23.5f / 32, 21.5f / 32}) < 0.04f;
 }  // 7 cells (a cross), in the box
-bool in_slab(Vec3 p) { return p.z > 0.27f && p.z < 0.31f; }            // the table top, at the plane z = 0.3
+// The table top: one layer of cells wholly under the plane z = 0.3 (a layer straddling the plane stays in the
+// grid, and the renderer cuts it: CellsStraddlingThePlaneOrTheBoxStay).
+bool in_slab(Vec3 p) { return p.z > 0.25f && p.z < 0.28f; }
 bool in_prop(Vec3 p) { return dist(p, {0.9f, 0.9f, 0.45f}) < 0.06f; }  // outside the box
 
 // Object space: the plane z = 0.3 of the model is z = 0, the box +-0.3 around x = y = 0.5, 0.5 high.
@@ -102,8 +104,8 @@ TEST(ObjectIsolation, UpNeedNotBeTheModelsZ) {
 }
 
 TEST(ObjectIsolation, CellsBelowThePlaneMarginGoEvenInsideTheBox) {
-    // A column from the slab up into the blob: connected to the blob, but what lies under plane + margin
-    // goes.
+    // A column from the slab up into the blob: connected to the blob, but the cells that lie wholly under
+    // plane + margin go; those straddling that height stay (the renderer cuts there exactly).
     std::vector<float> d = grid_of([](Vec3 p) {
         return in_blob(p) ||
                (std::fabs(p.x - 0.5f) < 0.03f && std::fabs(p.y - 0.5f) < 0.03f && p.z > 0.2f && p.z < 0.5f);
@@ -112,12 +114,32 @@ TEST(ObjectIsolation, CellsBelowThePlaneMarginGoEvenInsideTheBox) {
     settings.plane_margin_cells = 1.0;
     isolate_object(d, input(), settings);
     const float cell = 1.0f / k_res;
+    int straddling = 0;
     for (size_t i = 0; i < d.size(); ++i) {
         const Vec3 p = centre_of(int64_t(i));
-        if (p.z - 0.5f * cell < 0.3f + cell) {
+        const bool column = std::fabs(p.x - 0.5f) < 0.03f && std::fabs(p.y - 0.5f) < 0.03f && p.z > 0.2f;
+        if (p.z + 0.5f * cell < 0.3f + cell) {
             EXPECT_EQ(d[i], 0.0f) << "cell " << i;
+        } else if (column && p.z - 0.5f * cell < 0.3f + cell) {
+            EXPECT_GT(d[i], 0.0f) << "straddling cell " << i;
+            ++straddling;
         }
     }
+    EXPECT_GT(straddling, 0);
+}
+
+TEST(ObjectIsolation, CellsStraddlingThePlaneOrTheBoxStay) {
+    // An object standing on the plane (z = 0.3) whose base reaches into the cells that straddle the plane, and
+    // whose side reaches into a cell whose centre lies past the box's face (object x = 0.3, model x = 0.8):
+    // nothing of it is cut by the region.
+    const auto standing = [](Vec3 p) {
+        return std::fabs(p.x - 0.63f) < 0.19f && std::fabs(p.y - 0.5f) < 0.05f && p.z > 0.29f && p.z < 0.45f;
+    };
+    std::vector<float> d = grid_of(standing);
+    const std::vector<float> before = d;
+    const IsolationStats st = isolate_object(d, input(), IsolationSettings{});
+    EXPECT_EQ(st.cut_by_region, 0);
+    EXPECT_EQ(d, before);
 }
 
 TEST(ObjectIsolation, RefusesAGridOfTheWrongSize) {
