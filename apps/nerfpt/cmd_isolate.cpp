@@ -20,7 +20,7 @@ CLI::App* add_isolate_command(CLI::App& app, IsolateArgs& args) {
         "overlap the object's box, or lies wholly below --plane-margin cells above the supporting plane, is\n"
         "emptied, then every 26-connected component of occupied cells but the largest with fewer than\n"
         "--min-component cells. Renders skip empty cells, so the table, the props and the floaters vanish, and\n"
-        "the model is marked object-only: eval and view then show only what lies in its box, cut exactly at\n"
+        "the model is marked object-only: eval, view and bake then show only what lies in its box, cut exactly at\n"
         "the box and the plane (as --object does, and as a scene's \"placement\": \"object\" always does).\n"
         "The network is unchanged. Training the result further re-estimates the grid and clears the mark.");
     cmd->add_option("model", args.model, "Model file (.npt) with an object frame")->required();

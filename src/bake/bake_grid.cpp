@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/srgb.h"
 #include "nerf/field_batch.h"
+#include "nerf/object_frame.h"
 #include "nerf/mlp_batch.h"
 #include "nerf/sh_encoding.h"
 
@@ -43,17 +44,21 @@ struct SlabVoxels {
     std::vector<uint8_t> has_density;
 };
 
-// The centres of slab k's voxels that lie in occupied cells, and their index j * nx + i (increasing).
+// The centres of slab k's voxels that lie in occupied cells, and their index j * nx + i (increasing). An
+// isolated model (object_only) keeps only the voxels inside its object box, the cut its renders make.
 void slab_candidates(const NerfModel& model, const BakeLayout& L, int k, std::vector<Vec3>& pos,
                      std::vector<uint32_t>& cand) {
     const nerf::OccupancyGridView occ = model.occupancy.view();
+    const nerf::ObjectCut cut = model.object && model.object->object_only
+                                    ? nerf::object_cut(*model.object, model.world_to_model)
+                                    : nerf::ObjectCut{};
     const int nx = L.dims[0], ny = L.dims[1];
     pos.clear();
     cand.clear();
     for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i) {
             const Vec3 p = L.model_center(i, j, k);
-            if (!occ.is_occupied(p, occ.cascade_of(p))) continue;
+            if (!occ.is_occupied(p, occ.cascade_of(p)) || cut.outside(p)) continue;
             pos.push_back(p);
             cand.push_back(uint32_t(j) * uint32_t(nx) + uint32_t(i));
         }

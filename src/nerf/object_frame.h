@@ -21,8 +21,8 @@ struct ObjectFrame {
     Mat4 object_to_world;
     Vec3 box_min{-0.5f, -0.5f, 0.0f}, box_max{0.5f, 0.5f, 1.0f};  // the object's box, object space
     bool metric = false;  // object units are metres; else the capture's units
-    // Renders of the model show only what lies in the box (eval and view as with --object; scenes cut it with
-    // "placement": "object" anyway): set by `nerfpt isolate`, whose occupancy cut keeps the cells that straddle
+    // Renders of the model show only what lies in the box (eval and view as with --object, bake's voxels; scenes
+    // cut it with "placement": "object" anyway): set by `nerfpt isolate`, whose occupancy cut keeps the cells that straddle
     // the box and the supporting plane, so that the exact cut is the renderer's. Training clears it.
     bool object_only = false;
     // Object units per training-world unit (the similarity's scale, inverted).

@@ -22,6 +22,7 @@
 #include "core/image_io.h"
 #include "media/volume_grid.h"
 #include "nerf/model_file.h"
+#include "nerf/object_frame.h"
 #include "test_support.h"
 
 namespace npt::bake {
@@ -258,6 +259,30 @@ TEST(Bake, CropIsRespected) {
     // --voxel: the same grid by size.
     s.voxel_size = 1.0f / 32.0f;
     EXPECT_EQ(make_bake_layout(model, s).dims[0], 8);
+}
+
+TEST(Bake, AnIsolatedModelBakesOnlyItsObjectBox) {
+    // An object frame whose object space is model space (object_to_world = the model's world_to_model
+    // inverted, a similarity), its box the lower half of the occupied cells: marked object_only (what
+    // `nerfpt isolate` does), the bake keeps only the voxels inside the box, as renders cut it; unmarked, the
+    // frame alone changes nothing.
+    NerfModel model = make_model();
+    nerf::ObjectFrame frame;
+    frame.object_to_world = model.world_to_model.inverse();
+    frame.box_min = k_occupied_box.min;
+    frame.box_max = Vec3(k_occupied_box.max.x, k_occupied_box.max.y, 0.5f);
+    model.object = frame;
+    BakeSettings s;
+    s.resolution = 8;
+    s.threshold = 0.0f;
+    s.crop = k_occupied_box;
+    EXPECT_EQ(bake_model(model, s).density_voxels, 512u);
+    model.object->object_only = true;
+    const BakedGrid g = bake_model(model, s);
+    EXPECT_EQ(g.density_voxels, 256u);  // voxel centres at z = 0.39 .. 0.61 in steps of 1/32: four layers of 8
+    for (size_t v = 0; v < g.size(); ++v)  // colour-only voxels may border the density ones
+        if (g.has_density[v])
+            EXPECT_LT(g.layout.model_center(g.coords[3 * v], g.coords[3 * v + 1], g.coords[3 * v + 2]).z, 0.5f);
 }
 
 TEST(Bake, DeterministicWhateverTheThreadCount) {
