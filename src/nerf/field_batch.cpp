@@ -84,6 +84,11 @@ void accumulate_grid_gradient(const NerfLayout& layout, const std::vector<const 
             const FieldBatch& b = *chunks[c];
             for (size_t i = 0; i < b.n; ++i) {
                 const float* d_out = &b.d_encoded[i * enc_dims + level * nf];
+                // A sample past its ray's stop has no gradient (a third of a step's samples): adding its
+                // zeros would change no sum, only cost the lookups (and mark entries as reached).
+                bool zero = true;
+                for (int f = 0; f < nf; ++f) zero = zero && d_out[f] == 0.0f;
+                if (zero) continue;
                 HashCorner corners[8];
                 hash_level_corners(cfg, lv, level, layout.grid_position(positions[c][i]), corners);
                 for (int k = 0; k < 8; ++k) {

@@ -38,7 +38,8 @@ void field_backward(const NerfLayout& layout, const float* params, const float* 
 
 // d_params[grid range] += the hash-grid gradient of every chunk's samples: chunk c's positions[c][i] with
 // d_encoded chunks[c]->d_encoded. Parallel over levels (TBB); deterministic. reached (optional, one flag per
-// grid entry): set to 1 for every entry a sample's corner falls in (Adam::step_sparse visits only those).
+// grid entry): set to 1 for every entry a sample's corner falls in (Adam::step_sparse visits only those);
+// a sample whose gradient at a level is zero (past its ray's stop) is skipped there, which changes no sum.
 void accumulate_grid_gradient(const NerfLayout& layout, const std::vector<const Vec3*>& positions,
                               const std::vector<const FieldBatch*>& chunks, float* d_params,
                               uint8_t* reached = nullptr);
