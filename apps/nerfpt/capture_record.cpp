@@ -90,10 +90,12 @@ std::string capture_report_markdown(const nlohmann::json& record) {
         md += fmt::format(
             "| poses | COLMAP ({}) registered {} of {} frames, {} points, mean reprojection error {:.3f} px, {} "
             "jumps "
-            "in the camera path | {:.1f} s (extraction {:.1f}, matching {:.1f}, mapping {:.1f}) |\n",
+            "in the camera path | {:.1f} s (extraction {:.1f}, matching {:.1f}, mapping {:.1f}{}) |\n",
             p.value("quality", "best"), p.value("registered", 0), p.value("frames", 0), p.value("points", 0),
             num(p, "reprojection_px"), p.value("path_jumps", 0), num(p, "seconds"), num(p, "extraction_seconds"),
-            num(p, "matching_seconds"), num(p, "mapping_seconds"));
+            num(p, "matching_seconds"), num(p, "mapping_seconds"),
+            p.contains("loop_closure_seconds") ? fmt::format(", loops {:.1f}", num(p, "loop_closure_seconds"))
+                                               : std::string());
         total += num(p, "seconds");
     }
     if (const auto o = get("object"); !o.empty()) {
