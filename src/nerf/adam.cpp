@@ -61,6 +61,20 @@ struct StepConstants {
     float b1, b2, eps, l2, correction1, correction2, lr, ema_decay;
 };
 
+// The constants of the step after `step` completed ones. Powers and corrections in double: beta2^t stays
+// accurate over hundreds of thousands of steps.
+StepConstants step_constants(const OptimizerConfig& cfg, uint64_t step) {
+    const double t = double(step + 1);
+    return {cfg.beta1,
+            cfg.beta2,
+            cfg.epsilon,
+            cfg.l2_reg,
+            float(1.0 / (1.0 - std::pow(double(cfg.beta1), t))),
+            float(1.0 / (1.0 - std::pow(double(cfg.beta2), t))),
+            learning_rate_at(cfg, step),
+            cfg.ema_decay};
+}
+
 // m, v and w of one parameter for gradient g (L2 already added); returns the new w.
 inline float adam_update(const StepConstants& k, float w, float g, float& m, float& v) {
     m = k.b1 * m + (1.0f - k.b1) * g;
@@ -68,6 +82,32 @@ inline float adam_update(const StepConstants& k, float w, float g, float& m, flo
     const float m_hat = m * k.correction1;
     const float v_hat = v * k.correction2;
     return w - k.lr * m_hat / (std::sqrt(v_hat) + k.eps);
+}
+
+// Every parameter of [begin, end) updated, with L2 on [l2_begin, l2_end), and its average with it.
+void dense_update(const StepConstants& k, size_t begin, size_t end, size_t l2_begin, size_t l2_end, float* params,
+                  const float* grads, AdamState& st) {
+    float* m = st.m.data();
+    float* v = st.v.data();
+    float* ema = st.ema.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, k_block), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+            float g = grads[i];
+            if (i >= l2_begin && i < l2_end) g += k.l2 * params[i];
+            const float w = adam_update(k, params[i], g, m[i], v[i]);
+            params[i] = w;
+            ema[i] = k.ema_decay * ema[i] + (1.0f - k.ema_decay) * w;
+        }
+    });
+}
+
+// An average kept lazily, brought over k steps in which its parameter stayed at w (dk = ema_decay^k): what k
+// dense updates give.
+inline float caught_up(float ema, float w, float dk) { return dk * ema + (1.0f - dk) * w; }
+
+[[noreturn]] void throw_non_finite(size_t parameter, uint64_t step) {
+    throw Error("Adam: gradient of parameter " + std::to_string(parameter) + " is not finite (NaN or Inf) at step " +
+                std::to_string(step) + "; the training diverged (try a lower learning rate)");
 }
 
 }  // namespace
@@ -78,38 +118,10 @@ float Adam::ema_decay_pow(uint64_t k) const {
 }
 
 void Adam::step(float* params, const float* grads) {
-    if (const size_t bad = first_non_finite(grads, m_count); bad < m_count)
-        throw Error("Adam: gradient of parameter " + std::to_string(bad) +
-                    " is not finite (NaN or Inf) at step " + std::to_string(m_state.step) +
-                    "; the training diverged (try a lower learning rate)");
+    if (const size_t bad = first_non_finite(grads, m_count); bad < m_count) throw_non_finite(bad, m_state.step);
     sync_ema(params);  // lazily kept averages (step_sparse) first: this step updates every average
     m_ema_step.clear();
-
-    // Powers and corrections in double: beta2^t stays accurate over hundreds of thousands of steps.
-    const double t = double(m_state.step + 1);
-    const StepConstants k{m_cfg.beta1,
-                          m_cfg.beta2,
-                          m_cfg.epsilon,
-                          m_cfg.l2_reg,
-                          float(1.0 / (1.0 - std::pow(double(m_cfg.beta1), t))),
-                          float(1.0 / (1.0 - std::pow(double(m_cfg.beta2), t))),
-                          learning_rate_at(m_cfg, m_state.step),
-                          m_cfg.ema_decay};
-    float* m = m_state.m.data();
-    float* v = m_state.v.data();
-    float* ema = m_state.ema.data();
-    const size_t l2_begin = m_l2_begin, l2_end = m_l2_end;
-
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_count, k_block),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t i = r.begin(); i < r.end(); ++i) {
-                              float g = grads[i];
-                              if (i >= l2_begin && i < l2_end) g += k.l2 * params[i];
-                              const float w = adam_update(k, params[i], g, m[i], v[i]);
-                              params[i] = w;
-                              ema[i] = k.ema_decay * ema[i] + (1.0f - k.ema_decay) * w;
-                          }
-                      });
+    dense_update(step_constants(m_cfg, m_state.step), 0, m_count, m_l2_begin, m_l2_end, params, grads, m_state);
     ++m_state.step;
 }
 
@@ -146,34 +158,14 @@ void Adam::step_sparse(float* params, float* grads, const SparseEntries& sparse)
             },
             [](size_t a, size_t b) { return std::min(a, b); });
     }
-    if (bad < m_count)
-        throw Error("Adam: gradient of parameter " + std::to_string(bad) + " is not finite (NaN or Inf) at step " +
-                    std::to_string(m_state.step) + "; the training diverged (try a lower learning rate)");
+    if (bad < m_count) throw_non_finite(bad, m_state.step);
 
-    const double t = double(m_state.step + 1);
-    const StepConstants k{m_cfg.beta1,
-                          m_cfg.beta2,
-                          m_cfg.epsilon,
-                          m_cfg.l2_reg,
-                          float(1.0 / (1.0 - std::pow(double(m_cfg.beta1), t))),
-                          float(1.0 / (1.0 - std::pow(double(m_cfg.beta2), t))),
-                          learning_rate_at(m_cfg, m_state.step),
-                          m_cfg.ema_decay};
+    const StepConstants k = step_constants(m_cfg, m_state.step);
+    // The dense part (the MLPs): every parameter, as step() does.
+    dense_update(k, 0, sparse.begin, m_l2_begin, m_l2_end, params, grads, m_state);
     float* m = m_state.m.data();
     float* v = m_state.v.data();
     float* ema = m_state.ema.data();
-    const size_t l2_begin = m_l2_begin, l2_end = m_l2_end;
-    // The dense part (the MLPs): every parameter, as step() does.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, sparse.begin, k_block),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t i = r.begin(); i < r.end(); ++i) {
-                              float g = grads[i];
-                              if (i >= l2_begin && i < l2_end) g += k.l2 * params[i];
-                              const float w = adam_update(k, params[i], g, m[i], v[i]);
-                              params[i] = w;
-                              ema[i] = k.ema_decay * ema[i] + (1.0f - k.ema_decay) * w;
-                          }
-                      });
     // The reached entries, in entry order (each entry's update is independent: any split is bit-identical).
     const uint32_t now = uint32_t(m_state.step);  // steps done before this one
     uint8_t* flags = sparse.reached;
@@ -187,7 +179,7 @@ void Adam::step_sparse(float* params, float* grads, const SparseEntries& sparse)
             for (size_t i = sparse.begin + e * es, end = i + es; i < end; ++i) {
                 float w = params[i];
                 const float g = grads[i];
-                const float average = dk * ema[i] + (1.0f - dk) * w;
+                const float average = caught_up(ema[i], w, dk);
                 if (g != 0.0f) {
                     w = adam_update(k, w, g, m[i], v[i]);
                     params[i] = w;
@@ -212,7 +204,7 @@ void Adam::sync_ema(const float* params) {
                               const float dk = ema_decay_pow(uint32_t(now - m_ema_step[e]));
                               m_ema_step[e] = now;
                               for (size_t i = begin + e * es, end = i + es; i < end; ++i)
-                                  ema[i] = dk * ema[i] + (1.0f - dk) * params[i];
+                                  ema[i] = caught_up(ema[i], params[i], dk);
                           }
                       });
 }
@@ -237,7 +229,7 @@ void Adam::averaged_params(const float* params, float* out) const {
                           for (size_t e = r.begin(); e < r.end(); ++e) {
                               const float dk = ema_decay_pow(uint32_t(now - m_ema_step[e]));
                               for (size_t i = m_sparse_begin + e * es, end = i + es; i < end; ++i)
-                                  out[i] = (dk * ema[i] + (1.0f - dk) * params[i]) * scale;
+                                  out[i] = caught_up(ema[i], params[i], dk) * scale;
                           }
                       });
 }

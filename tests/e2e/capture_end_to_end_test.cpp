@@ -205,8 +205,9 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     // The plane is seen through the similarity that aligns the estimated cameras with the true ones, whose
     // own residual (the median camera-centre error, truth units, in which the box is 1 high) is of the order
     // of the 1% target: the plane is held to the target plus that residual, which it cannot be measured
-    // below (three runs of this test gave -0.0054, -0.0079 and -0.0105; the one whose residual was printed,
-    // -0.0054 with a residual of 0.0078).
+    // below (five runs of this test on 2026-12-05 gave -0.0091, -0.0079, -0.0078, -0.0054 and -0.0105, the
+    // one that printed its residual 0.0078). All five below the floor: a bias of the plane or of the
+    // alignment, not yet told apart, which this bound would let grow to the residual unnoticed.
     EXPECT_LT(std::abs(base.y()), 0.01 + cmp.centre.median);
     EXPECT_LT(std::hypot(base.x(), base.z()), 0.05);
     EXPECT_NEAR(height, 1.0, 0.1);
