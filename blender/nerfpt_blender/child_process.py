@@ -22,6 +22,7 @@ class ChildProcess:
     def __init__(self, cmd, env=None):
         self.cmd = list(cmd)
         self.stdout_lines = []
+        self.lines = []  # every (stream, line) in the order poll() took them
         self.stderr_lines = []
         self.progress = 0.0
         self.cancelled = False
@@ -61,6 +62,7 @@ class ChildProcess:
             except queue.Empty:
                 break
             (self.stdout_lines if name == "out" else self.stderr_lines).append(line)
+            self.lines.append((name, line))
             if name == "err":
                 f = nerfpt_cli.progress_fraction(line)
                 if f is not None:
@@ -111,11 +113,21 @@ class ChildProcess:
 def run(cmd, should_cancel=lambda child: False, on_line=None, poll_s=0.05, env=None):
     """Runs cmd to the end or until should_cancel(child) is true; on_line(child, stream, line) sees every line.
     Returns the finished ChildProcess (check .cancelled and .returncode)."""
+    delivered = 0
+
+    def deliver():
+        # From child.lines, not poll()'s result: finish() and cancel() also poll, and the lines they take
+        # (the last ones, often the error) must reach on_line too.
+        nonlocal delivered
+        child.poll()
+        if on_line:
+            for name, line in child.lines[delivered:]:
+                on_line(child, name, line)
+        delivered = len(child.lines)
+
     with ChildProcess(cmd, env=env) as child:
         while True:
-            for name, line in child.poll():
-                if on_line:
-                    on_line(child, name, line)
+            deliver()
             if not child.running():
                 break
             if should_cancel(child):
@@ -123,9 +135,7 @@ def run(cmd, should_cancel=lambda child: False, on_line=None, poll_s=0.05, env=N
                 break
             time.sleep(poll_s)
         child.finish()
-        for name, line in child.poll():
-            if on_line:
-                on_line(child, name, line)
+        deliver()
     return child
 
 

@@ -121,6 +121,18 @@ class Child(unittest.TestCase):
         self.assertEqual(child.warnings(), ["w"])
         self.assertIn(("out", "out1"), seen)
 
+    def test_lines_taken_by_cancel_reach_on_line(self):
+        # The loop's first look comes at the start, while the child sleeps; its line comes 0.2 s later, before
+        # should_cancel answers (0.8 s), so cancel() takes it from the pipe; on_line must still see it (it once
+        # saw only what the loop itself had polled).
+        seen = []
+        child = child_process.run(["sh", "-c", "sleep 0.2; echo out1; sleep 5"],
+                                  should_cancel=lambda c: time.sleep(0.8) or True,
+                                  on_line=lambda c, s, line: seen.append((s, line)))
+        self.assertTrue(child.cancelled)
+        self.assertEqual(child.stdout_lines, ["out1"])
+        self.assertEqual(seen, [("out", "out1")])
+
     def test_cancel_stops_at_once(self):
         t0 = time.time()
         child = child_process.run(["sleep", "30"], should_cancel=lambda c: time.time() - t0 > 0.3)
