@@ -5,7 +5,8 @@
 //   - frames/s while moving: camera frames (the first frame after each camera message) per second of wall time;
 //   - latency at the server: the frame header's `latency_ms` (camera message received -> frame handed to the
 //     socket), and the round trip at this page (message written -> frame read);
-//   - pass_ms (the render pass alone) and the JPEG's size.
+//   - pass_ms (the render pass alone), then what the server spends on the frame after it (accumulate, tone map,
+//     JPEG encode: the header's *_ms), and the JPEG's size.
 // Usage: serve_bench PORT [--seconds S] [--preview N] [--host H]. Start the server first, e.g.
 //   nerfpt serve scene.gltf --backend optix --res 1280x720 --port 7123 &   (bench/serve_gpu.sh does it all)
 #include <boost/asio/connect.hpp>
@@ -114,7 +115,7 @@ int main(int argc, char** argv) {
                     state.value("width", 0), state.value("height", 0),
                     preview > 0 ? preview : state.value("preview_divisor", 0), state.value("scene", "").c_str());
 
-        std::vector<double> latency, round_trip, pass, bytes;
+        std::vector<double> latency, round_trip, pass, accumulate, tonemap, encode, bytes;
         int width = 0, height = 0;
         // The clock starts at the first move's frame: before it OptiX may still be compiling its modules (up to a
         // minute on a fresh machine).
@@ -146,6 +147,9 @@ int main(int argc, char** argv) {
             round_trip.push_back(ms_since(sent));
             latency.push_back(frame["latency_ms"].get<double>());
             pass.push_back(frame.value("pass_ms", 0.0));
+            accumulate.push_back(frame.value("accumulate_ms", 0.0));
+            tonemap.push_back(frame.value("tonemap_ms", 0.0));
+            encode.push_back(frame.value("encode_ms", 0.0));
             bytes.push_back(double(page.jpeg_bytes));
             width = frame.value("width", 0);
             height = frame.value("height", 0);
@@ -163,7 +167,10 @@ int main(int argc, char** argv) {
         };
         row("server latency (camera message -> frame sent)", latency, "ms");
         row("round trip at the page (sent -> frame read)", round_trip, "ms");
-        row("render pass", pass, "ms");
+        row("render pass (its download included)", pass, "ms");
+        row("accumulate", accumulate, "ms");
+        row("tone map", tonemap, "ms");
+        row("JPEG encode", encode, "ms");
         std::vector<double> kib;
         for (double b : bytes) kib.push_back(b / 1024);
         row("JPEG", kib, "KiB");

@@ -211,6 +211,21 @@ CLI::App* add_info_command(CLI::App& app, InfoArgs& args) {
 
 namespace {
 
+// The per-image gains training.exposure_per_image learned: their range per channel, then each image's mean gain
+// over the channels in the training set's order, ten to a line, so that a drift over the video shows.
+void print_exposures(const nerf::ExposureState& e) {
+    if (e.empty()) return;
+    const nerf::ExposureRange r = nerf::exposure_range(e);
+    fmt::print("  exposure per image ({} images): gain R {:.3f}..{:.3f}, G {:.3f}..{:.3f}, B {:.3f}..{:.3f}; "
+               "mean gain per image:\n",
+               e.log_gain.size(), r.lo.x, r.hi.x, r.lo.y, r.hi.y, r.lo.z, r.hi.z);
+    for (size_t i = 0; i < e.log_gain.size(); ++i) {
+        const Rgb g = nerf::exposure_gain(e, i);
+        fmt::print("{}{:.3f}", i % 10 == 0 ? fmt::format("    {:4d}: ", i) : "", (g.x + g.y + g.z) / 3.0f);
+        fmt::print("{}", i % 10 == 9 || i + 1 == e.log_gain.size() ? "\n" : " ");
+    }
+}
+
 // Whether the model is relightable, and the capture light its relight stage estimated.
 void print_relight(const nerf::NerfModel& m) {
     if (!m.relightable()) {
@@ -287,9 +302,11 @@ int print_model_info(const std::string& path) {
                m.config.encoding.finest_resolution * m.aabb_scale, m.config.density_mlp.hidden_layers,
                m.config.density_mlp.width, m.config.density_mlp.outputs, m.config.color_mlp.hidden_layers,
                m.config.color_mlp.width, l.total);
-    if (m.training)
+    if (m.training) {
         fmt::print("training   {} steps, {:.0f} s; optimizer state included (can --resume)\n",
                    m.training->adam.step, m.training->elapsed_seconds);
+        print_exposures(m.training->exposure);
+    }
     else
         fmt::print("training   no training state (render/evaluate only)\n");
     print_relight(m);

@@ -26,6 +26,7 @@
 namespace npt::nerf {
 
 static_assert(std::endian::native == std::endian::little, "the model file is little-endian: add byte swaps");
+static_assert(sizeof(npt::Rgb) == 12, "EXPO stores Rgb as three floats");
 
 namespace {
 
@@ -270,6 +271,7 @@ struct RawModel {
     std::optional<std::vector<float>> view_directions;  // 3 per direction
     uint64_t view_count = 0;
     std::optional<std::string> object;  // OBJF's JSON text
+    std::optional<ExposureState> exposure;  // EXPO: the training's per-image gains
 };
 
 void check_finite(const std::vector<float>& x, const Reader& in, const char* what) {
@@ -375,6 +377,16 @@ RawModel read_sections(Reader& in) {
                 in.read(v->data(), n * 4);
             }
             t.adam.step = raw.training_step;
+        } else if (tag == "EXPO") {
+            if (length < 16 || (length - 16) % 36 != 0) throw corrupt();
+            const uint64_t images = in.get<uint64_t>();
+            ExposureState& e = raw.exposure.emplace();
+            e.step = in.get<uint64_t>();
+            if (images != (length - 16) / 36) throw in.error("corrupt section 'EXPO' (count does not match length)");
+            for (std::vector<Rgb>* v : {&e.log_gain, &e.m, &e.v}) {
+                v->resize(size_t(images));
+                in.read(v->data(), v->size() * sizeof(Rgb));
+            }
         } else if (tag == "OBJF") {
             std::string text(size_t(length), '\0');
             in.read(text.data(), text.size());
@@ -433,6 +445,10 @@ void save_model(const fs::path& path, const NerfModel& model, bool with_training
         check(training->adam.v, "optimizer state v");
         check(training->adam.ema, "optimizer state ema");
         if (!std::isfinite(training->elapsed_seconds)) throw refuse("elapsed_seconds is not finite");
+        for (const auto* v : {&training->exposure.log_gain, &training->exposure.m, &training->exposure.v})
+            for (const Rgb& x : *v)
+                if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
+                    throw refuse("an image's exposure state is NaN or Inf");
     }
 
     std::vector<uint8_t> relight;
@@ -488,6 +504,13 @@ void save_model(const fs::path& path, const NerfModel& model, bool with_training
         out.put(uint64_t(total));
         for (const auto* v : {&training->params, &training->adam.m, &training->adam.v, &training->adam.ema})
             out.write(v->data(), 4 * total);
+        const ExposureState& e = training->exposure;
+        if (!e.empty()) {
+            out.section("EXPO", 16 + 36 * uint64_t(e.log_gain.size()));
+            out.put(uint64_t(e.log_gain.size()));
+            out.put(uint64_t(e.step));
+            for (const auto* v : {&e.log_gain, &e.m, &e.v}) out.write(v->data(), v->size() * sizeof(Rgb));
+        }
     }
     if (model.object) {
         out.section("OBJF", object.size());
@@ -569,6 +592,13 @@ NerfModel load_model(const fs::path& path) {
         check_finite(t.adam.m, in, "optimizer state m");
         check_finite(t.adam.v, in, "optimizer state v");
         check_finite(t.adam.ema, in, "optimizer state ema");
+        if (raw.exposure) {
+            for (const auto* v : {&raw.exposure->log_gain, &raw.exposure->m, &raw.exposure->v})
+                for (const Rgb& x : *v)
+                    if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
+                        throw in.error("an image's exposure state in section 'EXPO' is NaN or Inf");
+            t.exposure = std::move(*raw.exposure);
+        }
         model.training = std::move(t);
     }
     if (raw.object)

@@ -253,6 +253,8 @@ NerfConfig config_from_json(const json& j, const std::string& source, const Nerf
         r.read_u64("seed", t.seed);
         r.read_int("checkpoint_interval", t.checkpoint_interval, 1, k_int_max);
         r.read_bool("random_background", t.random_background);
+        r.read_bool("exposure_per_image", t.exposure_per_image);
+        r.read_float("exposure_learning_rate", t.exposure_learning_rate, 0.0, 1.0, true, false);
         r.check_no_unknown();
     }
     return c;
@@ -304,7 +306,9 @@ json config_to_json(const NerfConfig& c) {
                      {"cuda_batch_samples", t.cuda_batch_samples},
                      {"seed", t.seed},
                      {"checkpoint_interval", t.checkpoint_interval},
-                     {"random_background", t.random_background}};
+                     {"random_background", t.random_background},
+                     {"exposure_per_image", t.exposure_per_image},
+                     {"exposure_learning_rate", float_for_json(t.exposure_learning_rate)}};
     return j;
 }
 

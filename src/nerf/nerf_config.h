@@ -87,6 +87,10 @@ struct TrainingConfig {
     uint64_t seed = 1337;
     int checkpoint_interval = 500;  // steps between checkpoints (also on Ctrl-C and at the end)
     bool random_background = true;  // train against a random colour per ray, so alpha is learned
+    // A gain per training image and channel, learned beside the network (image_exposure.h): a phone video's
+    // exposure and white balance drift. CPU trainer only.
+    bool exposure_per_image = false;
+    float exposure_learning_rate = 2e-3f;
 };
 
 struct NerfConfig {

@@ -11,6 +11,7 @@
 #include "core/transform.h"
 #include "nerf/adam.h"
 #include "nerf/dataset.h"
+#include "nerf/image_exposure.h"
 #include "nerf/nerf_config.h"
 #include "nerf/nerf_field.h"
 #include "nerf/object_frame.h"
@@ -29,6 +30,7 @@ struct TrainingState {
     AdamState adam;
     double elapsed_seconds = 0;  // training time so far, for --time across resumes
     uint32_t rays_per_step = 0;  // the adaptive batch size in rays for the next step (0: not yet known)
+    ExposureState exposure;      // per training image (training.exposure_per_image), else empty
 };
 
 struct NerfModel {

@@ -26,6 +26,7 @@ constexpr int k_ngp_batch_samples = 1 << 18;
 
 struct TrainRay {
     uint32_t first = 0, count = 0;  // samples [first, first + count) of the batch
+    uint32_t image = 0;
     Rgb target, background;
 };
 
@@ -49,6 +50,10 @@ Trainer::Trainer(NerfModel& model, const Dataset& data) try
     if (st.params.size() != m_layout.total) throw Error("the model's training state does not match its layout");
     if (st.adam.step > 0 || !st.adam.m.empty()) m_adam.set_state(st.adam);
     if (st.rays_per_step == 0) st.rays_per_step = k_initial_rays;
+    if (!model.config.training.exposure_per_image)
+        st.exposure = {};
+    else if (st.exposure.log_gain.size() != data.cameras.size())
+        st.exposure = make_exposure_state(data.cameras.size());  // new, or trained on another image set
     m_grads.assign(m_layout.total, 0.0f);
     if (model.config.optimizer.sparse_grid)
         m_reached.assign((m_layout.total - m_layout.grid_offset) / size_t(m_layout.grid.features_per_level), 0);
@@ -92,6 +97,8 @@ StepStats Trainer::step() {
     else
         m_adam.step_sparse(st.params.data(), m_grads.data(),
                            SparseEntries{m_layout.grid_offset, m_layout.grid.features_per_level, m_reached.data()});
+    if (!st.exposure.empty())
+        exposure_step(st.exposure, m_exposure_grad, m_model.config.training.exposure_learning_rate);
     stats.phases.adam = lap();
     stats.step = m_adam.steps();
     if (step % m_occupancy_interval == 0) {
@@ -152,6 +159,7 @@ StepStats Trainer::compute_gradient() try {
             const int ix = std::min(int(draw.px), m_data.width - 1), iy = std::min(int(draw.py), m_data.height - 1);
             const uint8_t* pix = m_data.image(draw.image) + (size_t(iy) * m_data.width + ix) * 4;
             TrainRay& tr = rays[r];
+            tr.image = draw.image;
             tr.background = draw.background;
             const float alpha = pix[3] / 255.0f;
             const Rgb rgb(pix[0] / 255.0f, pix[1] / 255.0f, pix[2] / 255.0f);
@@ -216,6 +224,8 @@ StepStats Trainer::compute_gradient() try {
     std::vector<Rgb> d_rgb(n_samples);
     std::vector<double> ray_loss(n_kept), ray_se(n_kept);
     std::vector<uint32_t> ray_used(n_kept);  // samples before the ray's early stop: those with a gradient
+    const bool exposure = !st.exposure.empty();
+    std::vector<Rgb> ray_d_log_gain(exposure ? n_kept : 0);
     const float inv_rays = 1.0f / float(std::max<size_t>(n_kept, 1));
     const float delta = cfg.loss.huber_delta;
     auto composite_ray = [&](size_t r) {
@@ -223,12 +233,19 @@ StepStats Trainer::compute_gradient() try {
         const CompositeResult fwd = composite_forward(&sigma[tr.first], &rgb[tr.first], &dts[tr.first],
                                                       int(tr.count), cfg.march.min_transmittance,
                                                       tr.background);
+        // The image's gain multiplies the whole composite (captures are opaque: the background is not seen).
+        const Rgb gain = exposure ? exposure_gain(st.exposure, tr.image) : Rgb(1.0f);
+        const Rgb pred = fwd.color * gain;
         Rgb grad;
         double loss = 0, se = 0;
         for (int k = 0; k < 3; ++k) {
-            const float diff = fwd.color[k] - tr.target[k];
+            const float diff = pred[k] - tr.target[k];
             loss += huber_loss(diff, delta, &grad[k]);
             se += double(diff) * diff;
+        }
+        if (exposure) {
+            ray_d_log_gain[r] = grad * pred * inv_rays;  // d pred / d log gain = pred
+            grad = grad * gain;
         }
         ray_loss[r] = loss;
         ray_se[r] = se;
@@ -268,6 +285,10 @@ StepStats Trainer::compute_gradient() try {
         });
     }
 
+    if (exposure) {  // summed per image in ray order: reproducible whatever the thread count
+        m_exposure_grad.assign(st.exposure.log_gain.size(), Rgb(0.0f));
+        for (size_t r = 0; r < n_kept; ++r) m_exposure_grad[rays[r].image] += ray_d_log_gain[r];
+    }
     stats.phases.loss = lap();
 
     // 5. Backward: MLP gradients per chunk, summed in chunk order; hash grid per level.

@@ -58,6 +58,7 @@ private:
     Adam m_adam;
     std::vector<float> m_grads;  // with optimizer.sparse_grid, its grid range is zero between steps
     std::vector<uint8_t> m_reached;  // per hash-grid entry: reached by this step's samples (sparse_grid)
+    std::vector<Rgb> m_exposure_grad;  // per training image: d loss / d log gain (training.exposure_per_image)
     uint64_t m_occupancy_interval = 16;  // steps between occupancy updates
 };
 

@@ -1,5 +1,7 @@
 #include "serve/frame_encoder.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <turbojpeg.h>
 
 #include <algorithm>
@@ -9,6 +11,10 @@
 #include "core/srgb.h"
 
 namespace npt::serve {
+
+namespace {
+constexpr size_t k_pixels_per_task = 1 << 15;
+}  // namespace
 
 void Accumulator::reset(int width, int height) {
     m_width = width;
@@ -23,11 +29,14 @@ void Accumulator::add(const Image& pass) {
                     " pass for a " + std::to_string(m_width) + "x" + std::to_string(m_height) + " film");
     const size_t n = size_t(m_width) * size_t(m_height);
     const size_t c = size_t(pass.channels);
-    for (size_t i = 0; i < n; ++i)
-        for (size_t k = 0; k < 3; ++k) {
-            const float v = pass.pixels[i * c + k];
-            m_sum[i * 3 + k] += std::isfinite(v) ? v : 0.0f;
-        }
+    // In parallel: at 1280x720 one thread took a few ms of every frame the viewer sends (the GPU's pass: ~10 ms).
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, k_pixels_per_task), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i)
+            for (size_t k = 0; k < 3; ++k) {
+                const float v = pass.pixels[i * c + k];
+                m_sum[i * 3 + k] += std::isfinite(v) ? v : 0.0f;
+            }
+    });
     ++m_passes;
 }
 
@@ -47,10 +56,13 @@ void Accumulator::tonemap(double exposure_stops, std::vector<uint8_t>& rgb) cons
     }();
     rgb.resize(m_sum.size());
     const float scale = float(std::exp2(exposure_stops)) / float(std::max(1, m_passes)) * float(k_lut - 1);
-    for (size_t i = 0; i < m_sum.size(); ++i) {
-        const float x = m_sum[i] * scale + 0.5f;
-        rgb[i] = x >= float(k_lut - 1) ? 255 : x > 0.0f ? lut[size_t(x)] : 0;
-    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_sum.size(), 3 * k_pixels_per_task),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i < r.end(); ++i) {
+                              const float x = m_sum[i] * scale + 0.5f;
+                              rgb[i] = x >= float(k_lut - 1) ? 255 : x > 0.0f ? lut[size_t(x)] : 0;
+                          }
+                      });
 }
 
 JpegEncoder::JpegEncoder() : m_handle(tjInitCompress()) {

@@ -418,28 +418,32 @@ void Viewer::render_preview(uint64_t client, PageView& v) {
     const auto t0 = Clock::now();
     Accumulator preview;
     preview.reset(o.width, o.height);
-    if (m_view == ViewLayer::beauty)
-        preview.add(m_preview->render_frame(o));
-    else
-        preview.add(render_view(*m_preview, o, false, v.depth_range));
+    Image layer;  // render_frame's image is the renderer's own: not copied
+    const Image& pass = m_view == ViewLayer::beauty
+                            ? m_preview->render_frame(o)
+                            : (layer = render_view(*m_preview, o, false, v.depth_range), layer);
     const double seconds = seconds_since(t0);
-    send_frame(client, v, preview, true, seconds, double(o.width) * o.height);
+    const auto t1 = Clock::now();
+    preview.add(pass);
+    send_frame(client, v, preview, true, seconds, double(o.width) * o.height, seconds_since(t1));
 }
 
 void Viewer::render_pass(uint64_t client, PageView& v) {
     render::RenderOptions o = options_for(m_width, m_height, 1);
     o.seed = m_seed + uint64_t(v.film.passes());
     const auto t0 = Clock::now();
-    if (m_view != ViewLayer::beauty)
-        v.film.add(render_view(*m_full, o, m_options.backend == "cpu", v.depth_range));
-    else if (m_options.backend == "cpu")
-        v.film.add(render_view(*m_full, o, true, v.depth_range));
-    else
-        v.film.add(m_full->render_frame(o));
+    Image cpu_or_layer;  // render_frame's image is the renderer's own: not copied
+    const bool cpu = m_options.backend == "cpu";
+    const Image& pass = m_view == ViewLayer::beauty && !cpu
+                            ? m_full->render_frame(o)
+                            : (cpu_or_layer = render_view(*m_full, o, cpu, v.depth_range), cpu_or_layer);
     const double seconds = seconds_since(t0);
+    const auto t1 = Clock::now();
+    v.film.add(pass);
+    const double accumulate = seconds_since(t1);
     // At most ~30 frames a second: a GPU pass takes milliseconds and the page cannot show more.
     if (v.film.passes() == 1 || v.film.passes() >= m_target_spp || seconds_since(v.last_send) >= 1.0 / 30)
-        send_frame(client, v, v.film, false, seconds, double(m_width) * m_height);
+        send_frame(client, v, v.film, false, seconds, double(m_width) * m_height, accumulate);
 }
 
 Image Viewer::render_view(render::SceneRenderer& renderer, const render::RenderOptions& options,
@@ -463,10 +467,14 @@ Image Viewer::render_view(render::SceneRenderer& renderer, const render::RenderO
 }
 
 void Viewer::send_frame(uint64_t client, PageView& v, const Accumulator& film, bool preview, double pass_seconds,
-                        double samples) {
+                        double samples, double accumulate_seconds) {
     // The views other than the beauty are pictures of data: no exposure.
+    const auto t0 = Clock::now();
     film.tonemap(m_view == ViewLayer::beauty ? m_exposure : 0.0, m_rgb);
+    const double tonemap = seconds_since(t0);
+    const auto t1 = Clock::now();
     const std::string jpeg = m_jpeg.encode(m_rgb, film.width(), film.height());
+    const double encode = seconds_since(t1);
     json header = {{"type", "frame"},
                    {"seq", ++m_seq},
                    {"width", film.width()},
@@ -478,6 +486,10 @@ void Viewer::send_frame(uint64_t client, PageView& v, const Accumulator& film, b
                    {"preview", preview},
                    {"pass_ms", pass_seconds * 1e3},
                    {"samples_per_s", pass_seconds > 0 ? samples / pass_seconds : 0.0},
+                   // Where the rest of a frame's time goes, after the pass (its download included).
+                   {"accumulate_ms", accumulate_seconds * 1e3},
+                   {"tonemap_ms", tonemap * 1e3},
+                   {"encode_ms", encode * 1e3},
                    {"camera", describe_camera(v.camera)},
                    {"camera_from", v.camera_from}};
     if (v.latency_pending) {

@@ -97,8 +97,9 @@ class Viewer final : public PageHandler {
     void render_still(uint64_t client, int spp);
     void save(uint64_t client);
     void save_keyframes(uint64_t client, double seconds_per_key);
+    // accumulate_seconds: the pass's addition to `film`, reported beside the tone map's and the encoder's time.
     void send_frame(uint64_t client, PageView& v, const Accumulator& film, bool preview, double pass_seconds,
-                    double samples);
+                    double samples, double accumulate_seconds = 0);
     // One pass of `renderer` as the page shows it (the beauty, or the view's layer made viewable).
     Image render_view(render::SceneRenderer& renderer, const render::RenderOptions& options, bool cancellable,
                       float& depth_range);

@@ -164,6 +164,9 @@ BackendChoice choose_backend(const std::string& requested) {
 }
 
 std::unique_ptr<TrainerBackend> make_trainer(Backend backend, NerfModel& model, const Dataset& data) {
+    if (backend == Backend::cuda && model.config.training.exposure_per_image)
+        throw Error("--backend cuda: training.exposure_per_image is trained by the CPU trainer only "
+                    "(use --backend cpu, or set it false in the config)");
 #if NERFPT_HAVE_CUDA
     if (backend == Backend::cuda) return std::make_unique<GpuTrainer>(model, data);
 #endif
