@@ -39,6 +39,7 @@ struct Page {
     Page(const std::string& host, const std::string& port) {
         boost::asio::ip::tcp::resolver resolver(ioc);
         boost::asio::connect(ws.next_layer(), resolver.resolve(host, port));
+        ws.next_layer().set_option(boost::asio::ip::tcp::no_delay(true));  // as a browser sends: at once
         ws.read_message_max(64u << 20);
         ws.handshake(host + ":" + port, "/ws");
     }

@@ -321,6 +321,10 @@ struct Server::Impl {
                 if (ec == asio::error::operation_aborted) return;
                 spdlog::warn("serve: accept failed: {}", ec.message());
             } else {
+                // Frames go out as soon as they are written: with Nagle's algorithm a frame's last small segment
+                // waits for the page's (delayed, up to 40 ms) acknowledgement of the one before.
+                beast::error_code nodelay_ec;
+                socket.set_option(tcp::no_delay(true), nodelay_ec);
                 std::make_shared<HttpSession>(*this, std::move(socket))->read();
             }
             accept();
