@@ -144,6 +144,10 @@ CLI::App* add_render_command(CLI::App& app, RenderArgs& args) {
     cmd->add_option("--task-count", args.task_count,
                     "Sequences on a farm: the number of tasks (default: $SLURM_ARRAY_TASK_COUNT, else 1)")
         ->check(CLI::Range(1, 1 << 20));
+    cmd->add_option("--writers", args.writers,
+                    "Sequences: frames whose files are written at once while the next ones render, 1..64; the "
+                    "writers run at a lower priority than the rendering (default: half the cores, at most 8)")
+        ->check(CLI::Range(1, 64));
     return cmd;
 }
 
@@ -158,6 +162,7 @@ int run_render(const RenderArgs& args, const GlobalSettings& global, InterruptGu
     if (args.fps > 0) throw sequence_only("--fps");
     if (args.task_index >= 0) throw sequence_only("--task-index");
     if (args.task_count >= 0) throw sequence_only("--task-count");
+    if (args.writers > 0) throw sequence_only("--writers");
     if (args.backend == "optix") render::choose_render_backend(args.backend, nullptr);  // fails before loading
     if (args.denoise) {  // before loading: the denoiser needs the OptiX backend, chosen or by default
         if (args.backend == "cpu") throw Error("--denoise: the denoiser is OptiX's; it does not run with --backend cpu");

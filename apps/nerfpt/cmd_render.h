@@ -32,6 +32,7 @@ struct RenderArgs {
     std::string animation;     // glTF animation by name; empty: the file's first
     int task_index = -1;       // -1: SLURM_ARRAY_TASK_ID, else 0
     int task_count = -1;       // -1: SLURM_ARRAY_TASK_COUNT, else 1
+    int writers = 0;           // frames written at once while the next render; 0: FrameWriter's default
 };
 
 // Parses "640x480" strictly: digits only, each side in 1..render::k_max_resolution. Throws npt::Error.

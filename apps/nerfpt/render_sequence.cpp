@@ -123,7 +123,7 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
     double pose_s = 0.0, render_s = 0.0;  // the shot's time in posing + updating, and in rendering
     size_t done = 0;
     // Frames are written by their own threads while the next ones render; each reports here, in order.
-    FrameWriter writer(FrameWriter::default_in_flight(), [&](int f, double write_s) {
+    FrameWriter writer(args.writers > 0 ? args.writers : FrameWriter::default_in_flight(), [&](int f, double write_s) {
         ++done;
         const fs::path exr = dist::frame_path(pattern, f);
         const double shot_s = since(t_shot);
