@@ -87,6 +87,8 @@ expect_error 2 "--aov-files requires --aov" render "$scene" -o "$tmp/a.exr" --ao
 expect_error 1 "folder '.*/no_such_dir' does not exist" render "$scene" -o "$tmp/no_such_dir/a.exr" --aov depth --aov-files
 expect_error 2 "--spp" render "$scene" -o "$tmp/a.exr" --spp 0
 expect_error 2 "--max-depth" render "$scene" -o "$tmp/a.exr" --max-depth -3
+expect_error 2 "--writers" render "$scene" -o "$tmp/a.####.exr" --frames 1-2 --writers 0
+expect_error 1 "--writers: is for sequences" render "$scene" -o "$tmp/a.exr" --writers 2
 expect_error 2 "unknown backend 'vulkan'" render "$scene" -o "$tmp/a.exr" --backend vulkan
 
 # Errors a user can act on: exit code 1, one line naming the thing.
