@@ -110,7 +110,7 @@ int main(int argc, char** argv) {
         nerf::Dataset test = nerf::load_dataset(data, "test");
         nerf::downscale_dataset(train, downscale);
         nerf::downscale_dataset(test, downscale);
-        const nerf::NerfConfig base = gpu ? nerf::cuda_default_config() : nerf::NerfConfig{};
+        const nerf::NerfConfig base = gpu ? nerf::cuda_default_config() : nerf::cpu_default_config();
         const nerf::NerfConfig config = config_path.empty() ? base : nerf::load_config(config_path, base);
         nerf::NerfModel model =
             nerf::create_model(config, train.aabb_scale, nerf::ngp_world_to_model(train.scale, train.offset));

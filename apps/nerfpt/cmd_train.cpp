@@ -217,7 +217,7 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     const nerf::Backend backend = resolve_backend(args.backend);
     if (!args.resume) {
         const nerf::NerfConfig base =
-            backend == nerf::Backend::cuda ? nerf::cuda_default_config() : nerf::NerfConfig{};
+            backend == nerf::Backend::cuda ? nerf::cuda_default_config() : nerf::cpu_default_config();
         nerf::NerfConfig config = args.config.empty() ? base : nerf::load_config(args.config, base);
         if (args.surface_smoothness >= 0.0f) config.loss.surface_smoothness = args.surface_smoothness;
         model =

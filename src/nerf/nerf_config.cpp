@@ -155,6 +155,12 @@ NerfConfig cuda_default_config() {
     return c;
 }
 
+NerfConfig cpu_default_config() {
+    NerfConfig c;
+    c.encoding.grid.log2_table_size = 17;
+    return c;
+}
+
 NerfConfig config_from_json(const json& j, const std::string& source, const NerfConfig& base) {
     if (!j.is_object())
         throw Error(source + ": expected a JSON object at the top level, got " + j.type_name());
