@@ -7,7 +7,8 @@
 #     say where a frame goes (rendering / posing and updating / writing).
 # Goal: the shot's rendering per frame within 5% of the still's frame time.
 # Run there after `scripts/gpu_check.sh run` (carry .gpu: the bundle and .gpu/nerf_demo, .gpu/nerf_synthetic).
-# MODEL=path/to/lego.npt skips the 60 s training. Logs in $OUT (default /tmp/gpu_out).
+# MODEL=path/to/lego.npt skips the 60 s training; STATIC=1 adds the like-for-like runs at the end. Logs in $OUT
+# (default /tmp/gpu_out).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_out}
@@ -40,3 +41,24 @@ for run in 1 2; do
 done
 # Two frames for the record (PNG previews).
 cp $demo/frames/shot.0001.png $demo/frames/shot.0048.png "$out/" 2>/dev/null || true
+# STATIC=1: like for like (docs/benchmarks.md, "Like for like"): the shot without its animation (every frame
+# frame 0's pose), render_bench against `render --frames 1-48` with 8 writer threads and with 1, twice: whether
+# the writers' compression on the host is what slows the sequence's rendering.
+if [[ ${STATIC:-0} == 1 ]]; then
+    python3 - $demo/shot.gltf $demo/shot_static.gltf <<'PY'
+import json, sys
+g = json.load(open(sys.argv[1])); g.pop("animations", None); json.dump(g, open(sys.argv[2], "w"))
+PY
+    for rep in 1 2; do
+        echo "== static, rep $rep: render_bench" | tee -a "$out/shot_gpu.log"
+        timeout 120 $bin/render_bench --backend optix --res 1920x1080 --spp 1 --repeats 1 --frames 48 \
+            --scene-file $demo/shot_static.gltf 2>&1 | tail -1 | tee -a "$out/shot_gpu.log"
+        for w in 8 1; do
+            echo "== static, rep $rep: render --frames 1-48 --writers $w" | tee -a "$out/shot_gpu.log"
+            rm -rf $demo/frames && mkdir -p $demo/frames
+            timeout 120 $bin/nerfpt render $demo/shot_static.gltf -o $demo/frames/shot.####.exr --frames 1-48 \
+                --res 1920x1080 --spp 1 --backend optix --writers $w 2>&1 | grep -E "per frame|rendered|error" |
+                tee -a "$out/shot_gpu.log"
+        done
+    done
+fi
