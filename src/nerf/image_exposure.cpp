@@ -9,7 +9,9 @@
 namespace npt::nerf {
 
 namespace {
-// Adam's constants for the gains: the network's betas; a gain moves at most ~learning_rate per step.
+// Adam for the gains with fixed betas (the defaults of optimizer.*, not the config's: a config changing them leaves
+// these alone); a gain moves at most ~learning_rate per step. The update is adam.cpp's adam_update written
+// again for 3 floats per image: see the note in docs/benchmarks.md (per-image exposure) on reusing Adam.
 constexpr double k_beta1 = 0.9, k_beta2 = 0.99;
 constexpr float k_epsilon = 1e-10f;
 }  // namespace
