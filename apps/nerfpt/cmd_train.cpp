@@ -109,6 +109,12 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "environment prefiltered with each lobe's width: +0.8 dB of albedo on our dev set, but the "
                     "roughness comes out low and relit highlights sparkle; see docs/relighting.md)")
         ->check(CLI::IsMember({"prefiltered", "sampled"}));
+    cmd->add_option("--relight-diffuse", args.relight_diffuse,
+                    "How the fit estimates the diffuse light: 'sampled' (the sum over each point's light "
+                    "directions) or 'ratio' (the unshadowed light of the prefiltered environment times the share "
+                    "of it the directions find unshadowed: no sampling noise where nothing is in the way). "
+                    "Default: 'ratio' with --relight-specular prefiltered, else 'sampled'")
+        ->check(CLI::IsMember({"ratio", "sampled"}));
     cmd->add_option("--relight-roughness-prior", args.relight.roughness_prior,
                     fmt::format("Weight of the prior that keeps each point's roughness near 0.5 where the "
                                 "capture light does not show it (default: {})",
@@ -318,6 +324,10 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
                                                        : nerf::NormalEstimator::depth_stencil;
         ro.specular = args.relight_specular == "prefiltered" ? nerf::SpecularEstimate::prefiltered
                                                              : nerf::SpecularEstimate::sampled;
+        const std::string diffuse = args.relight_diffuse.empty()
+                                        ? (args.relight_specular == "prefiltered" ? "ratio" : "sampled")
+                                        : args.relight_diffuse;
+        ro.diffuse = diffuse == "ratio" ? nerf::DiffuseEstimate::ratio : nerf::DiffuseEstimate::sampled;
         ro.quiet = global.quiet;
         ro.backend = backend;
         interrupted = !run_relight_stage(model, data, ro, interrupts);

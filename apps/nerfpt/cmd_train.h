@@ -30,6 +30,7 @@ struct TrainArgs {
     RelightStageOptions relight;  // --relight-*; steps, points and batch of 0 are the stage's defaults
     std::string relight_normals = "depth";  // depth | density (nerf::NormalEstimator)
     std::string relight_specular = "sampled";  // sampled | prefiltered (nerf::SpecularEstimate)
+    std::string relight_diffuse;                // sampled | ratio (nerf::DiffuseEstimate); "": as the specular
     bool force = false;
     // The command that continues after an interrupt, printed then; empty: this train command with --resume.
     std::string resume_hint;

@@ -55,6 +55,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ts.intrinsic.finest_resolution = options.finest_resolution;
     ts.batch = options.batch ? options.batch : (gpu ? k_relight_batch_gpu : k_relight_batch_cpu);
     ts.specular = options.specular;
+    ts.diffuse = options.diffuse;
     ts.roughness_prior = options.roughness_prior;
     nerf::RelightTrainer trainer(model, data.cameras.size(), samples, ts);
     nerf::RelightStepStats st;

@@ -36,6 +36,7 @@ struct RelightStageOptions {
     nerf::NormalEstimator normals = nerf::RelightSampleSettings{}.normals;
     float normal_smoothing = nerf::RelightSampleSettings{}.normal_smoothing;
     nerf::SpecularEstimate specular = nerf::RelightTrainSettings{}.specular;
+    nerf::DiffuseEstimate diffuse = nerf::RelightTrainSettings{}.diffuse;
     float roughness_prior = nerf::RelightTrainSettings{}.roughness_prior;
     int borrowing_pixels = -1;  // -1: k_relight_pixels_* of the backend
     int table_log2 =

@@ -212,8 +212,9 @@ RelightSamples synthetic_samples(int points, int K, bool shadows) {
     return s;
 }
 
-// Both shading estimators (relight_trainer.h), the prefiltered one through its ratio and its split sum.
-void expect_gradient_matches_finite_differences(SpecularEstimate estimate) {
+// Every pairing of the shading estimators (relight_trainer.h): the sums over the directions, the diffuse ratio,
+// the specular split sum.
+void expect_gradient_matches_finite_differences(SpecularEstimate estimate, DiffuseEstimate diffuse) {
     const NerfModel m = small_model();
     const RelightSamples s = synthetic_samples(64, 8, true);
     RelightTrainSettings ts;
@@ -223,6 +224,7 @@ void expect_gradient_matches_finite_differences(SpecularEstimate estimate) {
     ts.env_height = 4;
     ts.roughness_prior = 0.05f;  // large enough to show in the MLP's gradient
     ts.specular = estimate;
+    ts.diffuse = diffuse;
     RelightTrainer tr(m, 2, s, ts);
     // Move away from the initial point so that every term has a gradient.
     for (int i = 0; i < 20; ++i) tr.step();
@@ -255,11 +257,19 @@ void expect_gradient_matches_finite_differences(SpecularEstimate estimate) {
 }
 
 TEST(RelightTrainer, GradientMatchesFiniteDifferencesOfItsObjective) {
-    expect_gradient_matches_finite_differences(SpecularEstimate::sampled);
+    expect_gradient_matches_finite_differences(SpecularEstimate::sampled, DiffuseEstimate::sampled);
 }
 
 TEST(RelightTrainer, PrefilteredGradientMatchesFiniteDifferencesOfItsObjective) {
-    expect_gradient_matches_finite_differences(SpecularEstimate::prefiltered);
+    expect_gradient_matches_finite_differences(SpecularEstimate::prefiltered, DiffuseEstimate::ratio);
+}
+
+TEST(RelightTrainer, DiffuseRatioWithSampledSpecularGradientMatchesFiniteDifferences) {
+    expect_gradient_matches_finite_differences(SpecularEstimate::sampled, DiffuseEstimate::ratio);
+}
+
+TEST(RelightTrainer, PrefilteredSpecularWithSampledDiffuseGradientMatchesFiniteDifferences) {
+    expect_gradient_matches_finite_differences(SpecularEstimate::prefiltered, DiffuseEstimate::sampled);
 }
 
 // The recovery tests' fit: a grid fine enough for true_albedo's pattern, an 8x4 sky, exposures fixed.

@@ -109,7 +109,7 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
         throw Error("relight: the environment needs at least 2x1 texels and the batch one point");
     for (uint32_t img : samples.image)
         if (img >= image_count) throw Error("relight: a point refers to image " + std::to_string(img));
-    if (settings.specular == SpecularEstimate::prefiltered) {
+    if (settings.specular == SpecularEstimate::prefiltered || settings.diffuse == DiffuseEstimate::ratio) {
         m_albedo_table = std::make_shared<const DirectionalAlbedoTable>();
         IntrinsicSample white;  // the diffuse lobe per unit base colour (it does not depend on the roughness)
         white.albedo = Rgb(1.0f);
@@ -171,8 +171,10 @@ RelightStepStats RelightTrainer::compute_gradient() {
         env[t] = Rgb(std::exp(params[m_env_offset + 3 * t]), std::exp(params[m_env_offset + 3 * t + 1]),
                      std::exp(params[m_env_offset + 3 * t + 2]));
 
-    const bool prefiltered = m_prefilter != nullptr;
-    std::vector<Rgb> env_levels;  // the environment prefiltered for the specular lobes
+    const bool prefiltered = m_prefilter != nullptr;  // either estimate reads the prefiltered environment
+    const bool ratio_diffuse = m_settings.diffuse == DiffuseEstimate::ratio;
+    const bool lobe_specular = m_settings.specular == SpecularEstimate::prefiltered;
+    std::vector<Rgb> env_levels;  // the environment prefiltered for the specular lobes and the cosine
     if (prefiltered) m_prefilter->apply(env, env_levels);
 
     const int dims = m_layout.grid.output_dims();
@@ -223,7 +225,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
             const float r2 = r + k_roughness_step <= 1.0f ? r + k_roughness_step : r - k_roughness_step;
             const float dr = r2 - r;
             Rgb acc_d(0.0f), acc_s(0.0f), acc_d2(0.0f), acc_s2(0.0f);
-            // Prefiltered, the diffuse part is a ratio estimator: the unshadowed diffuse light, E_d(mu_o) times
+            // DiffuseEstimate::ratio: the diffuse part is a ratio estimator: the unshadowed diffuse light, E_d(mu_o) times
             // the cosine-prefiltered environment at n (no sampling noise), times the share of it the point's
             // directions find unshadowed, num / den (exactly 1 where nothing is in the way); plus their
             // indirect light. (On the glossy test sphere the directions' own sum left 24% albedo error, this 5%.)
@@ -239,19 +241,23 @@ RelightStepStats RelightTrainer::compute_gradient() {
                 lin[k] = le * S.visibility[sk] + S.indirect[sk];
                 const float w = dir_weight * wi.z;
                 wk[k] = w;
-                if (prefiltered) {
+                if (ratio_diffuse) {
                     const float g = materials::principled_diffuse(m_diffuse_lobe, wo.z, wi.z).x * w;
                     gk[k] = g;
                     num += le * (S.visibility[sk] * g);
                     den += le * g;
                     indirect_d += S.indirect[sk] * g;
-                    continue;
                 }
+                if (ratio_diffuse && lobe_specular) continue;
                 const BsdfSplit f = split_bsdf(r, wo, wi), f2 = split_bsdf(r2, wo, wi);
-                acc_d += lin[k] * (f.diffuse * w);
-                acc_d2 += lin[k] * (f2.diffuse * w);
-                acc_s += lin[k] * (f.specular * w);
-                acc_s2 += lin[k] * (f2.specular * w);
+                if (!ratio_diffuse) {
+                    acc_d += lin[k] * (f.diffuse * w);
+                    acc_d2 += lin[k] * (f2.diffuse * w);
+                }
+                if (!lobe_specular) {
+                    acc_s += lin[k] * (f.specular * w);
+                    acc_s2 += lin[k] * (f2.specular * w);
+                }
             }
             Rgb ratio(1.0f), unshadowed(0.0f);
             EnvPrefilter::CosineTaps cos_taps{};
@@ -259,7 +265,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
             // The specular part: the split sum E_s(mu_o, r) (V L_r + R) about the mirror direction.
             EnvPrefilter::Taps spec_taps{};
             float spec_scale = 0.0f;  // dC_specular / dL_prefiltered
-            if (prefiltered && wo.z > 0.0f) {
+            if (ratio_diffuse && wo.z > 0.0f) {
                 e_diffuse = m_albedo_table->diffuse(wo.z);
                 cos_taps = m_prefilter->cosine_taps(S.normal[L]);
                 Rgb lc(0.0f);
@@ -269,7 +275,8 @@ RelightStepStats RelightTrainer::compute_gradient() {
                     if (den[ch3] > 0.0f) ratio[ch3] = num[ch3] / den[ch3];
                 acc_d = unshadowed * ratio + indirect_d;
                 acc_d2 = acc_d;  // the diffuse factor does not depend on the roughness
-
+            }
+            if (lobe_specular && wo.z > 0.0f) {
                 const Vec3 wr = S.normal[L] * (2.0f * wo.z) - wo_w;
                 const auto lobe = [&](float rough, EnvPrefilter::Taps* taps, float* scale) {
                     const float width = specular_lobe_width(rough, wo.z);
@@ -320,9 +327,11 @@ RelightStepStats RelightTrainer::compute_gradient() {
             if (prefiltered && wo.z > 0.0f) {
                 for (int ch3 = 0; ch3 < 3; ++ch3) {
                     const float g_d = d_c[ch3] * e * is.albedo[ch3];  // dLoss / d acc_d
-                    for (int j = 0; j < 4; ++j)
-                        ch.d_levels[cos_taps.index[j]][ch3] += g_d * ratio[ch3] * e_diffuse * cos_taps.weight[j];
-                    if (spec_scale > 0.0f)
+                    if (ratio_diffuse)
+                        for (int j = 0; j < 4; ++j)
+                            ch.d_levels[cos_taps.index[j]][ch3] +=
+                                g_d * ratio[ch3] * e_diffuse * cos_taps.weight[j];
+                    if (lobe_specular && spec_scale > 0.0f)
                         for (int j = 0; j < 8; ++j)
                             ch.d_levels[spec_taps.index[j]][ch3] +=
                                 d_c[ch3] * e * spec_scale * spec_taps.weight[j];
@@ -332,19 +341,19 @@ RelightStepStats RelightTrainer::compute_gradient() {
                 if (wk[k] == 0.0f) continue;
                 const size_t sk = size_t(L) * K + k;
                 const EnvTaps taps = env_taps(W, H, S.dir[sk]);
-                Rgb d_le;  // dLoss / d(the environment's radiance toward direction k)
-                if (prefiltered) {
+                Rgb d_le(0.0f);  // dLoss / d(the environment's radiance toward direction k)
+                if (ratio_diffuse) {
                     // d ratio / d le_k = g_k (V_k - ratio) / den
                     for (int ch3 = 0; ch3 < 3; ++ch3)
                         d_le[ch3] = den[ch3] > 0.0f ? d_c[ch3] * e * is.albedo[ch3] * unshadowed[ch3] * gk[k] *
                                                           (S.visibility[sk] - ratio[ch3]) / den[ch3]
                                                     : 0.0f;
-                } else {
-                    if (S.visibility[sk] <= 0.0f) continue;
+                }
+                if ((!ratio_diffuse || !lobe_specular) && S.visibility[sk] > 0.0f) {
                     const BsdfSplit f = split_bsdf(r, wo, frame.to_local(S.dir[sk]));
+                    const float f_d = ratio_diffuse ? 0.0f : f.diffuse, f_s = lobe_specular ? 0.0f : f.specular;
                     for (int ch3 = 0; ch3 < 3; ++ch3)
-                        d_le[ch3] = d_c[ch3] * e * (is.albedo[ch3] * f.diffuse + f.specular) * wk[k] *
-                                    S.visibility[sk];
+                        d_le[ch3] += d_c[ch3] * e * (is.albedo[ch3] * f_d + f_s) * wk[k] * S.visibility[sk];
                 }
                 for (int ch3 = 0; ch3 < 3; ++ch3)
                     for (int j = 0; j < 4; ++j)

@@ -6,9 +6,10 @@
 // + f_s the relit renderer's BSDF (intrinsic_bsdf) in the frame of the density normal n, and S its specular part:
 // by default (SpecularEstimate::sampled) the same sum over the K directions with f_s. With
 // SpecularEstimate::prefiltered (specular_prefilter.h) S is the split sum E_s(mu_o, r) (V_r L_r + R_r) about the
-// mirror direction, L_r the environment prefiltered with the lobe's width, and the diffuse sum a ratio estimator
-// (the cosine-prefiltered unshadowed light times the share the K directions find unshadowed). Compared with the
-// pixel in sRGB
+// mirror direction, L_r the environment prefiltered with the lobe's width. The diffuse sum is the same sum over
+// the K directions (DiffuseEstimate::sampled) or a ratio estimator (DiffuseEstimate::ratio: the cosine-prefiltered
+// unshadowed light times the share the K directions find unshadowed, exact where nothing is in the way).
+// Compared with the pixel in sRGB
 // (squared error). The normal output learns the density normal by its own loss: the renderer shades with it. Albedo against light has a per-channel scale no image can fix: the prior is
 // an environment whose mean is grey (equal mean log radiance in R, G and B), and exposures whose mean log is 0.
 #pragma once
@@ -30,6 +31,9 @@ class EnvPrefilter;
 // How the fit estimates its shading (the comment at the top): `sampled`, sums over each point's K directions
 // (which miss glossy lobes); `prefiltered`, prefiltered environments (specular_prefilter.h).
 enum class SpecularEstimate { prefiltered, sampled };
+// How the fit estimates the diffuse light: `sampled`, the sum over each point's K directions; `ratio`, the
+// unshadowed light from the prefiltered environment times the share of it the K directions find unshadowed.
+enum class DiffuseEstimate { ratio, sampled };
 
 struct RelightTrainSettings {
     IntrinsicConfig intrinsic;
@@ -45,6 +49,7 @@ struct RelightTrainSettings {
     float roughness_prior = 0.0f;
     bool learn_exposure = true;
     SpecularEstimate specular = SpecularEstimate::sampled;  // measured on dev: docs/benchmarks.md
+    DiffuseEstimate diffuse = DiffuseEstimate::sampled;
     uint64_t seed = 7;
 };
 
@@ -84,9 +89,10 @@ class RelightTrainer {
     size_t m_images = 0;
     std::vector<float> m_params, m_grads;
     Adam m_adam;
-    std::shared_ptr<const DirectionalAlbedoTable> m_albedo_table;  // with SpecularEstimate::prefiltered
+    // With SpecularEstimate::prefiltered or DiffuseEstimate::ratio.
+    std::shared_ptr<const DirectionalAlbedoTable> m_albedo_table;
     std::shared_ptr<const EnvPrefilter> m_prefilter;
-    materials::Principled m_diffuse_lobe;  // prefiltered: its principled_diffuse is the ratio's weight
+    materials::Principled m_diffuse_lobe;  // DiffuseEstimate::ratio: its principled_diffuse is the ratio's weight
 };
 
 }  // namespace npt::nerf
