@@ -107,3 +107,10 @@ if os.path.exists(room):
     cv2.imwrite(os.path.join(out, 'room.png'), strip)
     with open(room, 'rb') as f, open(os.path.join(out, 'room_render.exr'), 'wb') as g: g.write(f.read())
 PY
+# KEEP_AOV=1: the albedo and roughness of test views 0, 5, 10 of the model and of each variant, for a closer look
+# on this machine (aov.tar.xz).
+if [[ ${KEEP_AOV:-0} == 1 ]]; then
+    (cd $work && find pred var_* -path '*/aov/*' \( -name 'albedo_[05].exr' -o -name 'albedo_10.exr' \
+        -o -name 'roughness_[05].exr' -o -name 'roughness_10.exr' \) -print0 2>/dev/null |
+        tar -cJf "$out/aov.tar.xz" --null -T -)
+fi
