@@ -120,6 +120,11 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                                 "capture light does not show it (default: {})",
                                 args.relight.roughness_prior))
         ->check(CLI::Range(0.0f, 100.0f));
+    cmd->add_option("--relight-huber", args.relight.huber_delta,
+                    "Huber threshold of the fit's photometric loss, in sRGB units: residuals beyond it count "
+                    "linearly, so a point's albedo follows the median of its views more than their mean (a "
+                    "highlight the fit cannot explain moves it less). 0: squared error (default: 0)")
+        ->check(CLI::Range(0.0f, 1.0f));
     cmd->add_option("--relight-batch", args.relight.batch,
                     fmt::format("Surface points per optimiser step (default: {} on a GPU, {} on the CPU)",
                                 k_relight_batch_gpu, k_relight_batch_cpu))

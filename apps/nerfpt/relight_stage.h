@@ -38,6 +38,7 @@ struct RelightStageOptions {
     nerf::SpecularEstimate specular = nerf::RelightTrainSettings{}.specular;
     nerf::DiffuseEstimate diffuse = nerf::RelightTrainSettings{}.diffuse;
     float roughness_prior = nerf::RelightTrainSettings{}.roughness_prior;
+    float huber_delta = nerf::RelightTrainSettings{}.huber_delta;
     int borrowing_pixels = -1;  // -1: k_relight_pixels_* of the backend
     int table_log2 =
         nerf::IntrinsicConfig{}.grid.log2_table_size;  // hash entries per level of the intrinsic grid

@@ -214,7 +214,8 @@ RelightSamples synthetic_samples(int points, int K, bool shadows) {
 
 // Every pairing of the shading estimators (relight_trainer.h): the sums over the directions, the diffuse ratio,
 // the specular split sum.
-void expect_gradient_matches_finite_differences(SpecularEstimate estimate, DiffuseEstimate diffuse) {
+void expect_gradient_matches_finite_differences(SpecularEstimate estimate, DiffuseEstimate diffuse,
+                                                float huber_delta = 0.0f) {
     const NerfModel m = small_model();
     const RelightSamples s = synthetic_samples(64, 8, true);
     RelightTrainSettings ts;
@@ -225,6 +226,7 @@ void expect_gradient_matches_finite_differences(SpecularEstimate estimate, Diffu
     ts.roughness_prior = 0.05f;  // large enough to show in the MLP's gradient
     ts.specular = estimate;
     ts.diffuse = diffuse;
+    ts.huber_delta = huber_delta;
     RelightTrainer tr(m, 2, s, ts);
     // Move away from the initial point so that every term has a gradient.
     for (int i = 0; i < 20; ++i) tr.step();
@@ -266,6 +268,11 @@ TEST(RelightTrainer, PrefilteredGradientMatchesFiniteDifferencesOfItsObjective) 
 
 TEST(RelightTrainer, DiffuseRatioWithSampledSpecularGradientMatchesFiniteDifferences) {
     expect_gradient_matches_finite_differences(SpecularEstimate::sampled, DiffuseEstimate::ratio);
+}
+
+// A threshold well inside the residuals this fit has after 20 steps, so that both branches are taken.
+TEST(RelightTrainer, HuberLossGradientMatchesFiniteDifferences) {
+    expect_gradient_matches_finite_differences(SpecularEstimate::sampled, DiffuseEstimate::sampled, 0.02f);
 }
 
 TEST(RelightTrainer, PrefilteredSpecularWithSampledDiffuseGradientMatchesFiniteDifferences) {

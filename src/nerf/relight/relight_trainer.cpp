@@ -105,6 +105,8 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
       m_images(image_count),
       m_adam(relight_optimizer(settings.learning_rate), 0, 0, 0) {
     if (samples.size() == 0) throw Error("relight: no surface points to train on");
+    if (!(settings.huber_delta >= 0.0f) || !std::isfinite(settings.huber_delta))
+        throw Error("relight: the Huber threshold must be finite and >= 0");
     if (settings.env_width < 2 || settings.env_height < 1 || settings.batch < 1)
         throw Error("relight: the environment needs at least 2x1 texels and the batch one point");
     for (uint32_t img : samples.image)
@@ -191,6 +193,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
     const HashLevels levels = hash_levels(m_layout.grid);
     const float inv_batch = 1.0f / float(batch);
     const float dir_weight = k_two_pi / float(K);
+    const float huber = m_settings.huber_delta;
 
     tbb::parallel_for(size_t(0), n_chunks, [&](size_t c) {
         Chunk& ch = chunks[c];
@@ -295,16 +298,23 @@ RelightStepStats RelightTrainer::compute_gradient() {
             }
             const float e = std::exp(params[m_exposure_offset + S.image[s]]);
             Rgb d_c;  // dLoss/dC
-            double se = 0;
+            double se = 0, loss = 0;
             Rgb pred;
             for (int ch3 = 0; ch3 < 3; ++ch3) {
                 pred[ch3] = e * (is.albedo[ch3] * acc_d[ch3] + acc_s[ch3]);
                 float dp, dt;
                 const float diff = srgb_encode(pred[ch3], &dp) - srgb_encode(S.target[s][ch3], &dt);
                 se += double(diff) * diff;
-                d_c[ch3] = diff * dp * inv_batch;
+                float d_loss = diff;  // d loss / d diff
+                if (huber > 0.0f && std::fabs(diff) > huber) {
+                    d_loss = std::copysign(huber, diff);
+                    loss += double(huber) * (std::fabs(diff) - 0.5 * huber);
+                } else {
+                    loss += 0.5 * double(diff) * diff;
+                }
+                d_c[ch3] = d_loss * dp * inv_batch;
             }
-            ch.loss += 0.5 * se;
+            ch.loss += loss;
             ch.se += se;
             // Albedo and roughness.
             float d_r = 0.0f, d_e = 0.0f;

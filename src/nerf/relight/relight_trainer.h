@@ -47,6 +47,10 @@ struct RelightTrainSettings {
     // A smooth capture light constrains the roughness little, and the fit, left free, used low roughness to
     // turn the environment into a view-dependent texture (sparkling highlights under a small sun).
     float roughness_prior = 0.0f;
+    // The photometric loss per channel of the sRGB residual d: d^2 / 2 (0, the default), or Huber's with this
+    // threshold (linear beyond it): each point's albedo then follows the median of its views more than their
+    // mean, so a highlight that the fit's shading cannot explain, seen from a few views, moves it less.
+    float huber_delta = 0.0f;
     bool learn_exposure = true;
     SpecularEstimate specular = SpecularEstimate::sampled;  // measured on dev: docs/benchmarks.md
     DiffuseEstimate diffuse = DiffuseEstimate::sampled;
@@ -55,7 +59,7 @@ struct RelightTrainSettings {
 
 struct RelightStepStats {
     uint64_t step = 0;
-    double loss = 0;          // photometric Huber loss per point (sRGB)
+    double loss = 0;          // photometric loss per point (sRGB; squared or Huber's: huber_delta)
     double mse = 0;           // per channel, sRGB, for a PSNR
     double normal_loss = 0;   // mean |n_pred - n_density|^2
     double objective = 0;     // what the gradient is of: photometric + weighted normal loss + priors
