@@ -1,6 +1,8 @@
 // The live-training page (nerfpt train --serve, nerfpt capture --serve): loss and PSNR charts drawn on small
 // canvases, the held-out strip (truth | render | error) and the current model orbited through three.js's
 // OrbitControls (only the controls: the server renders). Exposes window.nerfpt for the browser test.
+import { fmtTime, fillStages } from '/stages.js';
+
 const $ = (id) => document.getElementById(id);
 const test = { trains: 0, evals: 0, frames: 0, strips: 0, state: null, lastTrain: null, lastEval: null, errors: [] };
 window.nerfpt = test;
@@ -9,12 +11,6 @@ const hist = { step: [], loss: [], psnr: [] };
 let evals = [];
 let run = null;
 
-function fmtTime(s) {
-  if (s == null || !isFinite(s)) return '–';
-  s = Math.round(s);
-  const h = Math.floor(s / 3600), m = Math.floor((s % 3600) / 60), sec = s % 60;
-  return (h ? `${h}:${String(m).padStart(2, '0')}` : `${m}`) + `:${String(sec).padStart(2, '0')}`;
-}
 const fmt = (v, d) => (v == null || !isFinite(v) ? '–' : v.toFixed(d));
 
 // --- charts ---------------------------------------------------------------------------------------------------
@@ -91,15 +87,7 @@ function showStrip(b64, split) {
 function showStages(stages) {
   if (!stages || !stages.length) return;
   $('stages-box').hidden = false;
-  const t = $('stages');
-  t.innerHTML = '';
-  for (const s of stages) {
-    const tr = t.insertRow();
-    tr.insertCell().textContent = s.name;
-    const st = tr.insertCell(); st.textContent = s.state; st.className = s.state;
-    tr.insertCell().textContent = s.seconds != null ? fmtTime(s.seconds) : '';
-    tr.insertCell().textContent = s.note || '';
-  }
+  fillStages($('stages'), stages);
 }
 
 function showFinished(finished, interrupted) {

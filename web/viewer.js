@@ -319,6 +319,15 @@ ws.onmessage = async (ev) => {
   });
 };
 
+// nerfpt serve CAPTURE_DIR: a link to the capture's report (the server answers /capture/report.json only then).
+fetch('/capture/report.json' + location.search, { method: 'HEAD' }).then((r) => {
+  if (!r.ok) return;
+  const a = document.getElementById('report-link');
+  a.href = '/report.html' + location.search;
+  a.hidden = false;
+  test.reportLink = true;
+}).catch(() => {});
+
 // For the browser test: a pixel of the image as shown (x, y in full-resolution pixels).
 test.pixel = (x, y) => Array.from(ctx2d.getImageData(x, y, 1, 1).data.slice(0, 3));
 test.select = select;

@@ -5,42 +5,24 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <nlohmann/json.hpp>
+#include <memory>
 
 #include "cmd_render.h"
 #include "core/error.h"
-#include "core/temp_file.h"
 #include "input_checks.h"
 #include "render/backend/render_backend.h"
+#include "serve/capture_report.h"
+#include "serve/model_scene.h"
 #include "serve/server.h"
 #include "serve/viewer.h"
 
 namespace npt::cli {
 namespace fs = std::filesystem;
 
-namespace {
-
-// A model alone is served through a JSON scene that holds it in a volume cube, MODEL.serve.json beside it
-// (made once, kept: the viewer's saves go there, and `nerfpt render` renders it).
-fs::path scene_for_model(const fs::path& model) {
-    fs::path scene = model;
-    scene.replace_extension(".serve.json");
-    if (fs::exists(scene)) return scene;
-    const nlohmann::json doc = {
-        {"volumes", {{{"name", "model"}, {"file", model.filename().string()}}}},
-        {"camera", {{"position", {0.0, -4.0, 2.0}}, {"look_at", {0, 0, 0}}, {"up", {0, 0, 1}}, {"yfov_deg", 40}}},
-        {"render", {{"width", 640}, {"height", 480}, {"spp", 64}, {"max_depth", 4}}}};
-    write_text_atomic(scene, doc.dump(2) + "\n");
-    spdlog::info("wrote {}: the model in a volume cube (edit it in the viewer; nerfpt render renders it)",
-                 scene.string());
-    return scene;
-}
-
-}  // namespace
-
 CLI::App* add_serve_command(CLI::App& app, ServeArgs& args) {
     CLI::App* cmd = app.add_subcommand(
-        "serve", "View a scene or model in the browser: path-traced progressively, placed and cropped, saved back");
+        "serve",
+        "View a scene, model or capture in the browser: path-traced progressively, placed and cropped, saved back");
     cmd->footer(
         "Prints a URL; open it in a browser (over SSH: ssh -L 7007:127.0.0.1:7007 HOST, then open it here).\n"
         "The page shows the scene path-traced progressively: one pass at 1/PREVIEW of the resolution after each\n"
@@ -52,11 +34,18 @@ CLI::App* add_serve_command(CLI::App& app, ServeArgs& args) {
         "SCENE_STEM.shot.json + SCENE_STEM.camera_path.gltf for `nerfpt render ... --frames`.\n"
         "By default only this machine can connect (127.0.0.1); --host 0.0.0.0 (or another address) requires the\n"
         "random token printed in the URL.\n"
+        "A capture's folder (what `nerfpt capture VIDEO -o DIR` wrote: capture.json, model.npt) shows its model.npt\n"
+        "in the viewer through DIR/model.serve.json (made once; when the capture found the object: upright on\n"
+        "y = 0 at its real size, framed by the camera), and a report page (/report.html, linked from the viewer):\n"
+        "the stages and their times as report.md has them, PSNR/SSIM per held-out view with eval's truth | render\n"
+        "| error images, and turntable.mp4. Only those files of the folder are served.\n"
         "Examples: nerfpt serve scenes/example/scene.gltf\n"
-        "          nerfpt serve lego.npt --port 8080 --backend optix");
+        "          nerfpt serve lego.npt --port 8080 --backend optix\n"
+        "          nerfpt serve beer   (the folder of nerfpt capture Beer.mp4 -o beer)");
     cmd->add_option("INPUT", args.input,
-                    "A scene (.gltf, .glb, .obj, .json; saving writes .json and .gltf only) or a model (.npt: served "
-                    "through MODEL.serve.json, made beside it once)")
+                    "A scene (.gltf, .glb, .obj, .json; saving writes .json and .gltf only), a model (.npt: served "
+                    "through MODEL.serve.json, made beside it once) or a capture's folder (its model and a report "
+                    "page)")
         ->required();
     cmd->add_option("--host", args.host,
                     "Address to listen on (default: 127.0.0.1, this machine only); any other address requires the "
@@ -80,16 +69,26 @@ CLI::App* add_serve_command(CLI::App& app, ServeArgs& args) {
 int run_serve(const ServeArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
     (void)global;
     (void)interrupts;  // Ctrl-C ends the server at once: saves are atomic (a temporary renamed over the file)
-    require_file(args.input, "INPUT");
+    require_path(args.input, "INPUT");
     if (args.backend == "optix") render::choose_render_backend(args.backend, nullptr);  // fails before loading
     if (!args.output_dir.empty() && !fs::is_directory(args.output_dir))
         throw Error("--output-dir: '" + args.output_dir + "' is not a folder");
     fs::path scene = args.input;
-    std::string ext = scene.extension().string();
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (ext == ".npt") scene = scene_for_model(scene);
+    std::unique_ptr<serve::CaptureReport> capture;
+    if (fs::is_directory(scene)) {
+        capture = std::make_unique<serve::CaptureReport>(scene);
+        serve::ModelSceneOptions mo;
+        mo.object = capture->object_frame();
+        if (capture->elevation_deg()) mo.elevation_deg = *capture->elevation_deg();
+        scene = serve::scene_for_model(capture->model(), mo);
+    } else {
+        std::string ext = scene.extension().string();
+        for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+        if (ext == ".npt") scene = serve::scene_for_model(scene, {});
+    }
 
     serve::ServerOptions so;
+    so.routes = capture.get();
     so.host = args.host;
     so.port = uint16_t(args.port);
     if (!serve::is_loopback_host(args.host)) so.token = serve::random_token();
@@ -112,6 +111,12 @@ int run_serve(const ServeArgs& args, const GlobalSettings& global, InterruptGuar
         spdlog::warn("listening on {}: anyone who can reach it and has the token can view and edit the scene",
                      args.host);
     fmt::print("nerfpt serve: {} ({} backend) at {}\n", scene.string(), vo.backend, server.url());
+    if (capture) {
+        const std::string url = server.url();
+        const size_t q = url.find('?');
+        fmt::print("nerfpt serve: the capture's report at {}report.html{}\n", url.substr(0, q),
+                   q == std::string::npos ? "" : url.substr(q));
+    }
     std::fflush(stdout);
     server.run();
     viewer.stop();

@@ -3,8 +3,11 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "serve/protocol.h"
 
@@ -34,6 +37,23 @@ class PageHandler {
     // per page makes or frees it.
     virtual void page_opened(uint64_t client) { (void)client; }
     virtual void page_closed(uint64_t client) { (void)client; }
+};
+
+// A response the server gives beside its embedded assets: a document made in memory, or a file on disk
+// (served with HTTP Range requests, for a video). Only what a RouteSource lists is served: no URL becomes a
+// path.
+struct ServedFile {
+    std::string content_type;
+    std::string body;            // when `file` is empty
+    std::filesystem::path file;  // else: this file, read when it is requested
+};
+
+// Extra URL paths the server answers (the capture report, serve/capture_report.h). Called on the server's
+// thread; must not block for long. `path` is percent-decoded, without the query.
+class RouteSource {
+  public:
+    virtual ~RouteSource() = default;
+    virtual std::optional<ServedFile> find(std::string_view path) const = 0;
 };
 
 }  // namespace npt::serve

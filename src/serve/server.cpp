@@ -7,6 +7,12 @@
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <deque>
 #include <fstream>
 #include <map>
@@ -15,6 +21,7 @@
 
 #include "core/error.h"
 #include "serve/assets.h"
+#include "serve/http_util.h"
 #include "serve/protocol.h"
 
 namespace npt::serve {
@@ -46,6 +53,31 @@ namespace {
 
 constexpr size_t k_max_texts_queued = 256;  // per page; beyond it the oldest text is dropped
 constexpr std::chrono::seconds k_http_timeout{30};
+// A file's response holds at most this much: an open-ended Range ("bytes=0-", a video) gets this part, and
+// the browser asks for the rest; a request without Range for a larger file is refused.
+constexpr uint64_t k_max_range_bytes = uint64_t(4) << 20;
+constexpr uint64_t k_max_whole_bytes = uint64_t(256) << 20;
+
+// An open file descriptor, closed on scope exit.
+struct Fd {
+    int fd = -1;
+    ~Fd() {
+        if (fd >= 0) ::close(fd);
+    }
+};
+
+// Reads [first, first + n) of an open file; false on a short read (the file shrank) or an error.
+bool read_part(int fd, uint64_t first, uint64_t n, std::string* out) {
+    out->resize(size_t(n));
+    uint64_t done = 0;
+    while (done < n) {
+        const ssize_t r = ::pread(fd, out->data() + done, size_t(n - done), off_t(first + done));
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) return false;
+        done += uint64_t(r);
+    }
+    return true;
+}
 
 std::string query_value(std::string_view target, std::string_view key) {
     const size_t q = target.find('?');
@@ -250,16 +282,19 @@ struct Server::Impl {
             });
         }
 
+        using Headers = std::vector<std::pair<http::field, std::string>>;
         void respond(http::status status, std::string_view type, std::string body, bool keep_alive,
-                     const std::string& cookie = {}, bool head = false) {
+                     const std::string& cookie = {}, bool head = false, const Headers& headers = {},
+                     std::optional<uint64_t> head_length = std::nullopt) {
             auto res = std::make_shared<http::response<http::string_body>>(status, 11);
             res->set(http::field::server, "nerfpt");
             res->set(http::field::content_type, std::string(type));
             res->set(http::field::cache_control, "no-store");
             res->set("X-Content-Type-Options", "nosniff");
             if (!cookie.empty()) res->set(http::field::set_cookie, cookie);
+            for (const auto& [field, value] : headers) res->set(field, value);
             res->keep_alive(keep_alive);
-            const size_t size = body.size();
+            const uint64_t size = head && head_length ? *head_length : body.size();
             if (!head) res->body() = std::move(body);
             res->content_length(size);
             http::async_write(stream, *res, [self = shared_from_this(), res](beast::error_code ec, size_t) {
@@ -305,13 +340,71 @@ struct Server::Impl {
             if (req.method() != http::verb::get && req.method() != http::verb::head)
                 return respond(http::status::method_not_allowed, "text/plain", "GET only\n", req.keep_alive());
             if (path == "/") path = server.options.index;
-            const Asset* a = find_asset(path);
-            if (!a) return respond(http::status::not_found, "text/plain", "not found\n", req.keep_alive());
             std::string cookie;
             if (!server.options.token.empty())
                 cookie = "nerfpt_token=" + server.options.token + "; HttpOnly; SameSite=Strict; Path=/";
-            respond(http::status::ok, a->content_type, std::string(reinterpret_cast<const char*>(a->data), a->size),
-                    req.keep_alive(), cookie, req.method() == http::verb::head);
+            const bool head = req.method() == http::verb::head;
+            if (const Asset* a = find_asset(path))
+                return respond(http::status::ok, a->content_type,
+                               std::string(reinterpret_cast<const char*>(a->data), a->size), req.keep_alive(),
+                               cookie, head);
+            // The routes' own list decides; the decoded path is only compared with it.
+            if (server.options.routes)
+                if (const auto decoded = percent_decode_path(path))
+                    if (auto found = server.options.routes->find(*decoded)) {
+                        if (found->file.empty())
+                            return respond(http::status::ok, found->content_type, std::move(found->body),
+                                           req.keep_alive(), cookie, head);
+                        return serve_file(*found, req, cookie, head);
+                    }
+            respond(http::status::not_found, "text/plain", "not found\n", req.keep_alive());
+        }
+
+        // A listed file, with a single byte range when asked (a <video> seeks with them). Opened without
+        // following a symbolic link: one put in its place after the listing is not followed out of the
+        // folder.
+        void serve_file(const ServedFile& f, const http::request<http::string_body>& req,
+                        const std::string& cookie, bool head) {
+            Fd fd{::open(f.file.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC)};
+            struct stat st {};
+            if (fd.fd < 0 || ::fstat(fd.fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+                spdlog::warn("serve: {}: cannot open it ({})", f.file.string(),
+                             fd.fd < 0 ? std::strerror(errno) : "not a file");
+                return respond(http::status::not_found, "text/plain", "not found\n", req.keep_alive());
+            }
+            const uint64_t size = uint64_t(st.st_size);
+            const auto range_header = req.find(http::field::range);
+            const ByteRange range = range_header == req.end()
+                                        ? ByteRange{}
+                                        : parse_byte_range(std::string_view(range_header->value().data(),
+                                                                            range_header->value().size()),
+                                                           size, k_max_range_bytes);
+            Headers headers{{http::field::accept_ranges, "bytes"}};
+            if (range.kind == ByteRange::Kind::unsatisfiable) {
+                headers.push_back({http::field::content_range, "bytes */" + std::to_string(size)});
+                return respond(http::status::range_not_satisfiable, "text/plain", "range not satisfiable\n",
+                               req.keep_alive(), cookie, head, headers);
+            }
+            uint64_t first = 0, n = size;
+            http::status status = http::status::ok;
+            if (range.kind == ByteRange::Kind::partial) {
+                first = range.first;
+                n = range.last - range.first + 1;
+                status = http::status::partial_content;
+                headers.push_back({http::field::content_range, "bytes " + std::to_string(range.first) + "-" +
+                                                                   std::to_string(range.last) + "/" +
+                                                                   std::to_string(size)});
+            } else if (size > k_max_whole_bytes) {
+                return respond(http::status::payload_too_large, "text/plain",
+                               "too large to send whole: ask for byte ranges\n", req.keep_alive());
+            }
+            std::string body;
+            if (!head && !read_part(fd.fd, first, n, &body)) {
+                spdlog::warn("serve: {}: cannot read it", f.file.string());
+                return respond(http::status::internal_server_error, "text/plain", "cannot read the file\n",
+                               false);
+            }
+            respond(status, f.content_type, std::move(body), req.keep_alive(), cookie, head, headers, n);
         }
     };
 

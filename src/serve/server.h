@@ -1,5 +1,5 @@
-// The viewer's HTTP + WebSocket server (Boost.Beast on one asio thread): serves the page's embedded assets and
-// one WebSocket per page, whose text messages go to the Viewer and whose frames come back from it. Only
+// The viewer's HTTP + WebSocket server (Boost.Beast on one asio thread): serves the page's embedded assets
+// and one WebSocket per page, whose text messages go to the Viewer and whose frames come back from it. Only
 // server.cpp includes Beast; this header does not, so the CLI does not compile it.
 #pragma once
 
@@ -14,10 +14,13 @@ namespace npt::serve {
 struct ServerOptions {
     std::string host = "127.0.0.1";
     uint16_t port = 7007;  // 0: any free port (tests)
-    // Required of every request when not empty: "?token=..." on the page's URL (then a cookie) and on the socket.
+    // Required of every request when not empty: "?token=..." on the page's URL (then a cookie) and on the
+    // socket.
     std::string token;
     // The page "/" serves: the scene viewer, or "/train.html" (the live-training page).
     std::string index = "/index.html";
+    // Paths answered beside the embedded assets (a capture's report and files), or null. Not owned.
+    const RouteSource* routes = nullptr;
 };
 
 // A random 128-bit token in hex, from the system's random source.
@@ -28,7 +31,8 @@ bool is_loopback_host(const std::string& host);
 
 class Server final : public ViewerSink {
   public:
-    // Binds host:port (throws npt::Error naming them when that fails: in use, not an address of this machine).
+    // Binds host:port (throws npt::Error naming them when that fails: in use, not an address of this
+    // machine).
     explicit Server(const ServerOptions& options);
     ~Server() override;
     Server(const Server&) = delete;

@@ -22,13 +22,15 @@ fi
 scene_dir="$work/scene"
 rm -rf "$scene_dir" && mkdir -p "$scene_dir"
 cp "$here/../data/serve/"* "$scene_dir/"
-cp "$here/viewer_test.mjs" "$here/train_test.mjs" "$work/"
+cp "$here/viewer_test.mjs" "$here/train_test.mjs" "$here/report_test.mjs" "$work/"
 cd "$work"
 NERFPT="$nerfpt" SCENE="$scene_dir/scene.json" SHOTS="$shots" CHROMIUM="$chromium" node viewer_test.mjs
 # nerf train --serve's page: needs NeRF-synthetic lego (../shared/data); without it, that part is skipped.
 lego=${NERFPT_LEGO:-$here/../../../shared/data/nerf_synthetic/lego}
 if [[ -f "$lego/transforms_train.json" ]]; then
     NERFPT="$nerfpt" LEGO="$(realpath "$lego")" WORK="$work" SHOTS="$shots" CHROMIUM="$chromium" node train_test.mjs
+    # nerfpt serve CAPTURE_DIR's report, on a capture folder made from that training's model.
+    NERFPT="$nerfpt" LEGO="$(realpath "$lego")" WORK="$work" SHOTS="$shots" CHROMIUM="$chromium" node report_test.mjs
 else
-    echo "serve.browser: no $lego: the training page's test is skipped"
+    echo "serve.browser: no $lego: the training page's and the capture report's tests are skipped"
 fi
