@@ -291,6 +291,8 @@ RelightTrainSettings recovery_settings(SpecularEstimate estimate) {
     ts.env_height = 4;
     ts.learn_exposure = false;
     ts.specular = estimate;
+    // As `nerfpt train --relight-specular prefiltered` pairs it: with the diffuse ratio.
+    ts.diffuse = estimate == SpecularEstimate::prefiltered ? DiffuseEstimate::ratio : DiffuseEstimate::sampled;
     return ts;
 }
 
