@@ -389,9 +389,8 @@ struct ExactShading {
 struct GlossyFit {
     double albedo_error = 0, roughness = 0;
 };
-GlossyFit fit_glossy_sphere(SpecularEstimate estimate) {
-    constexpr float k_roughness = 0.3f;
-    const ExactShading exact(k_roughness);
+GlossyFit fit_glossy_sphere(SpecularEstimate estimate, float roughness) {
+    const ExactShading exact(roughness);
     RelightSamples s = synthetic_samples(2048, 8, false);
     for (size_t i = 0; i < s.size(); ++i) {
         float d, e;
@@ -411,19 +410,23 @@ GlossyFit fit_glossy_sphere(SpecularEstimate estimate) {
     return fit;
 }
 
-// With 8 light directions per point a glossy lobe is missed almost always: the sampled estimator puts the sky's
+// With 8 light directions per point a glossy lobe is missed almost always (at roughness 0.3 and at 0.6, inside
+// the dev set's 0.3-0.8): the sampled estimator puts the sky's
 // reflection into the albedo (an offset that no per-channel scale removes); the prefiltered one does not. (Under
 // a uniform sky the roughness barely changes the shading, so it is printed, not checked.)
 TEST(RelightTrainer, PrefilteredSpecularRecoversAGlossyAlbedo) {
-    const GlossyFit pre = fit_glossy_sphere(SpecularEstimate::prefiltered);
-    const GlossyFit sampled = fit_glossy_sphere(SpecularEstimate::sampled);
-    std::printf("relative albedo error: prefiltered %.4f, sampled %.4f; mean roughness %.3f / %.3f (truth 0.3)\n",
-                pre.albedo_error, sampled.albedo_error, pre.roughness, sampled.roughness);
-    // The bound is not derived: 0.053 was measured, against 0.49 sampled; 0.08 is the fit's own bound on exact
-    // targets (0.05, RecoversAKnownAlbedo...) with room for the tables and the separable diffuse. The second
-    // check is the one that says what the estimator is for.
-    EXPECT_LT(pre.albedo_error, 0.08);
-    EXPECT_LT(pre.albedo_error, 0.5 * sampled.albedo_error);
+    for (const float roughness : {0.3f, 0.6f}) {
+        const GlossyFit pre = fit_glossy_sphere(SpecularEstimate::prefiltered, roughness);
+        const GlossyFit sampled = fit_glossy_sphere(SpecularEstimate::sampled, roughness);
+        std::printf("roughness %.1f: relative albedo error: prefiltered %.4f, sampled %.4f; mean roughness %.3f / "
+                    "%.3f\n",
+                    roughness, pre.albedo_error, sampled.albedo_error, pre.roughness, sampled.roughness);
+        // The bound is not derived: 0.053 (roughness 0.3) and 0.061 (0.6) were measured, against 0.49 and 0.32
+        // sampled; 0.08 is the fit's own bound on exact targets (0.05, RecoversAKnownAlbedo...) with room for
+        // the tables and the separable diffuse. The second check is the one that says what the estimator is for.
+        EXPECT_LT(pre.albedo_error, 0.08) << "roughness " << roughness;
+        EXPECT_LT(pre.albedo_error, 0.5 * sampled.albedo_error) << "roughness " << roughness;
+    }
 }
 
 }  // namespace
