@@ -10,6 +10,7 @@
 #include "cmd_render.h"
 #include "core/error.h"
 #include "input_checks.h"
+#include "nerf/model_file.h"
 #include "render/backend/render_backend.h"
 #include "serve/capture_report.h"
 #include "serve/model_scene.h"
@@ -44,8 +45,8 @@ CLI::App* add_serve_command(CLI::App& app, ServeArgs& args) {
         "          nerfpt serve beer   (the folder of nerfpt capture Beer.mp4 -o beer)");
     cmd->add_option("INPUT", args.input,
                     "A scene (.gltf, .glb, .obj, .json; saving writes .json and .gltf only), a model (.npt: served "
-                    "through MODEL.serve.json, made beside it once) or a capture's folder (its model and a report "
-                    "page)")
+                    "through MODEL.serve.json, made beside it once; a capture's model stands upright on y = 0) or a "
+                    "capture's folder (its model and a report page)")
         ->required();
     cmd->add_option("--host", args.host,
                     "Address to listen on (default: 127.0.0.1, this machine only); any other address requires the "
@@ -84,7 +85,15 @@ int run_serve(const ServeArgs& args, const GlobalSettings& global, InterruptGuar
     } else {
         std::string ext = scene.extension().string();
         for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-        if (ext == ".npt") scene = serve::scene_for_model(scene, {});
+        if (ext == ".npt") {
+            // A capture's model carries its object frame: stood upright like CAPTURE_DIR's. Read only when the
+            // scene is made (once; a kept MODEL.serve.json is used as it is).
+            serve::ModelSceneOptions mo;
+            fs::path made = scene;
+            made.replace_extension(".serve.json");
+            if (!fs::exists(made)) mo.object = nerf::load_model(scene).object;
+            scene = serve::scene_for_model(scene, mo);
+        }
     }
 
     serve::ServerOptions so;
