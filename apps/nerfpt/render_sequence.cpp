@@ -13,6 +13,7 @@
 #include "core/progress.h"
 #include "dist/frames.h"
 #include "frame_writer.h"
+#include "image_pool.h"
 #include "interrupt.h"
 #include "render/backend/render_backend.h"
 #include "render/scene_data.h"
@@ -122,6 +123,7 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
     };
     double pose_s = 0.0, render_s = 0.0;  // the shot's time in posing + updating, and in rendering
     size_t done = 0;
+    ImagePool images;  // declared before the writer: its pending writes hold images until it is gone
     // Frames are written by their own threads while the next ones render; each reports here, in order.
     FrameWriter writer(args.writers > 0 ? args.writers : FrameWriter::default_in_flight(), [&](int f, double write_s) {
         ++done;
@@ -148,9 +150,11 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
         Progress progress(ps, std::cerr);
         const auto t0 = std::chrono::steady_clock::now();
         auto aovs = std::make_shared<render::AovImages>();
-        auto image = std::make_shared<const Image>(renderer->render(
-            frame_options, [&progress](uint64_t d, uint64_t total) { progress.update(d, total); }, nullptr,
-            aovs.get()));
+        std::shared_ptr<Image> rendered = images.take();
+        renderer->render_into(
+            frame_options, *rendered, [&progress](uint64_t d, uint64_t total) { progress.update(d, total); },
+            aovs.get());
+        std::shared_ptr<const Image> image = std::move(rendered);
         progress.finish();
         render_s += since(t0);
         const ExrMetadata meta =

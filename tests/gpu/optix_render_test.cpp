@@ -104,8 +104,9 @@ TEST(OptixRender, ExampleSceneMatchesTheCpu) {
     expect_same_as_cpu(scene::load_scene(path), 160, 120, 64, 3, "example");
 }
 
-// render_frame (a viewer's frames, into the renderer's page-locked image) gives render's image bit for bit: the
-// same seed gives one image (the sample planes are added in a fixed order), whichever frame came before.
+// render_frame (a viewer's frames, into the renderer's page-locked image) and render_into (a shot's, into the
+// caller's reused image) give render's image bit for bit: the same seed gives one image (the sample planes are
+// added in a fixed order), whichever frame came before.
 TEST(OptixRender, FramesAreTheRendersImages) {
     if (!render::optix_backend_built()) GTEST_SKIP() << "built without the OptiX backend";
     const auto scene_path = test::shared_data() / "scenes" / "cornell" / "scene.gltf";
@@ -128,6 +129,16 @@ TEST(OptixRender, FramesAreTheRendersImages) {
     ASSERT_EQ(frame.pixels.size(), once.pixels.size());
     EXPECT_EQ(frame.pixels, once.pixels);
     EXPECT_NE(other.pixels, once.pixels);  // seed 4 did render another image into it
+    // render_into (a shot's frames, into images they cycle through): the same image in a reused one.
+    Image into;
+    o.seed = 4;
+    renderer->render_into(o, into);
+    const float* storage = into.pixels.data();
+    EXPECT_EQ(into.pixels, other.pixels);
+    o.seed = 3;
+    renderer->render_into(o, into);
+    EXPECT_EQ(into.pixels.data(), storage);  // no new allocation
+    EXPECT_EQ(into.pixels, once.pixels);
 }
 
 // The model-in-scene demo (scripts/make_nerf_demo_scene.py: lego on a pedestal in a Cornell box beside a mirror

@@ -85,6 +85,10 @@ class OptixSceneRenderer final : public SceneRenderer {
         return m_renderer.render(resolved, progress, denoised, aovs);
     }
     const Image& render_frame(const RenderOptions& resolved) override { return m_renderer.render_frame(resolved); }
+    void render_into(const RenderOptions& resolved, Image& out, const ProgressFn& progress,
+                     AovImages* aovs) override {
+        m_renderer.render_into(resolved, out, progress, aovs);
+    }
 
   private:
     gpu::OptixRenderer m_renderer;

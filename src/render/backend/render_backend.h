@@ -39,6 +39,12 @@ class SceneRenderer {
         m_frame = render(resolved);
         return m_frame;
     }
+    // render() into `out`, whose storage is reused when it already has the frame's size and channels (a
+    // sequence's frames cycle through a few images): no allocation per frame. OptiX downloads straight into it.
+    virtual void render_into(const RenderOptions& resolved, Image& out, const ProgressFn& progress = {},
+                             AovImages* aovs = nullptr) {
+        out = render(resolved, progress, nullptr, aovs);
+    }
 
   private:
     Image m_frame;

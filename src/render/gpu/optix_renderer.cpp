@@ -161,6 +161,17 @@ Image OptixRenderer::render(const render::RenderOptions& options, const render::
     return image;
 }
 
+void OptixRenderer::render_into(const render::RenderOptions& options, Image& out, const render::ProgressFn& progress,
+                                render::AovImages* aovs) {
+    const int channels = options.transparent ? 4 : 3;
+    if (out.width != m->width || out.height != m->height || out.channels != channels)
+        out = Image(m->width, m->height, channels);
+    const bool want_aovs = aovs && options.aovs != 0;
+    m->trace(options, progress, nullptr, nullptr, want_aovs);
+    if (want_aovs) *aovs = render::make_aov_images(m->width, m->height, options.aovs);
+    m->download(out, want_aovs ? aovs : nullptr);
+}
+
 const Image& OptixRenderer::render_frame(const render::RenderOptions& options) {
     const int channels = options.transparent ? 4 : 3;
     if (!m->frame || m->frame->image.channels != channels)

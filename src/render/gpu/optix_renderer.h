@@ -28,6 +28,9 @@ class OptixRenderer {
     // The same render into the renderer's own page-locked frame (frames of a viewer or an animation): no image
     // allocated per frame and a download at the bus's speed. The reference holds until the next call.
     const Image& render_frame(const render::RenderOptions& options);
+    // render() (no denoiser) into `out`, reusing its storage when it has the frame's size and channels.
+    void render_into(const render::RenderOptions& options, Image& out, const render::ProgressFn& progress,
+                     render::AovImages* aovs = nullptr);
     // After scene::pose_scene moved the scene this renderer was built from: the moved meshes' vertices are
     // uploaded and the acceleration structure rebuilt (only when a mesh moved), the lights, the volumes'
     // placements and the camera updated. Grids, models, textures and the pipeline are kept.
