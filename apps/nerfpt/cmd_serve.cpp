@@ -81,17 +81,22 @@ int run_serve(const ServeArgs& args, const GlobalSettings& global, InterruptGuar
         serve::ModelSceneOptions mo;
         mo.object = capture->object_frame();
         if (capture->elevation_deg()) mo.elevation_deg = *capture->elevation_deg();
+        if (!fs::exists(serve::model_scene_path(capture->model())))
+            mo.environment_file = serve::write_capture_sky(capture->model(), nerf::load_model(capture->model()));
         scene = serve::scene_for_model(capture->model(), mo);
     } else {
         std::string ext = scene.extension().string();
         for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
         if (ext == ".npt") {
-            // A capture's model carries its object frame: stood upright like CAPTURE_DIR's. Read only when the
-            // scene is made (once; a kept MODEL.serve.json is used as it is).
+            // A capture's model carries its object frame (stood upright like CAPTURE_DIR's), a relightable one
+            // its capture environment (the sky). Read only when the scene is made (once; a kept
+            // MODEL.serve.json is used as it is).
             serve::ModelSceneOptions mo;
-            fs::path made = scene;
-            made.replace_extension(".serve.json");
-            if (!fs::exists(made)) mo.object = nerf::load_model(scene).object;
+            if (!fs::exists(serve::model_scene_path(scene))) {
+                const nerf::NerfModel model = nerf::load_model(scene);
+                mo.object = model.object;
+                mo.environment_file = serve::write_capture_sky(scene, model);
+            }
             scene = serve::scene_for_model(scene, mo);
         }
     }

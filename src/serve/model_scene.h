@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 
+#include "core/image.h"
+#include "nerf/nerf_model.h"
 #include "nerf/object_frame.h"
 
 namespace npt::serve {
@@ -19,10 +21,27 @@ struct ModelSceneOptions {
     std::optional<nerf::ObjectFrame> object;
     double elevation_deg =
         20;  // the camera's height above the object's base plane, seen from its box's centre
+    // The scene's sky ("environment": {"file": ...}, relative to the scene); empty: none. A relightable model is
+    // given its capture environment (capture_sky below), so that its default "relit" shading shows it lit as it
+    // was filmed instead of black.
+    std::string environment_file;
 };
+
+// A relightable model's capture environment (nerf/relight: equirectangular in model-space directions) as the
+// sky of the scene model_scene_json makes: an equirectangular linear RGB image in the scene's convention (+Y up,
+// lights/environment.h), each texel's world direction taken through the volume's placement (the default cube,
+// identity node) into model space. Throws npt::Error for a model that is not relightable.
+Image capture_sky(const nerf::NerfModel& model, int width = 128, int height = 64);
+
+// MODEL.capture_sky.exr beside `model` for a relightable model (written atomically when missing), else "": the
+// name to put in ModelSceneOptions::environment_file.
+std::string write_capture_sky(const std::filesystem::path& model_path, const nerf::NerfModel& model);
 
 // The JSON scene (docs/formats.md, "JSON scenes") holding `model_file` (relative to the scene).
 nlohmann::json model_scene_json(const std::string& model_file, const ModelSceneOptions& options);
+
+// MODEL.serve.json beside `model`: where scene_for_model keeps the scene.
+std::filesystem::path model_scene_path(const std::filesystem::path& model);
 
 // MODEL.serve.json beside `model`: kept when it exists, else written (atomically) from model_scene_json.
 std::filesystem::path scene_for_model(const std::filesystem::path& model, const ModelSceneOptions& options);

@@ -15,6 +15,8 @@
 #include <thread>
 
 #include "core/image_io.h"
+#include "lights/environment.h"
+#include "nerf/relight/relight_env.h"
 #include "nerf/model_file.h"
 #include "nerf/nerf_model.h"
 #include "nerf/object_frame.h"
@@ -461,6 +463,61 @@ TEST(ServeCapture, SceneStandsTheObjectUprightInView) {
     viewer.stop();
     server.stop();
     io.join();
+}
+
+
+// A relightable model served alone gets its capture environment as the scene's sky, turned as the volume turns
+// the model: the box placement runs local (= world) x, y, z along model z, x, y (nerf/nerf_placement.h). The
+// environment here is radiance (max(d.x, 0), max(d.y, 0), max(d.z, 0)) + 0.01 in model directions, so the sky
+// is red toward world +Y, green toward +Z, blue toward +X.
+TEST(ServeModelScene, ARelightableModelGetsItsCaptureEnvironmentAsTheSky) {
+    nerf::NerfConfig c;
+    c.encoding.grid.levels = 2;
+    c.encoding.grid.log2_table_size = 10;
+    c.occupancy.resolution = 8;
+    nerf::NerfModel m = nerf::create_model(c, 1.0f, nerf::ngp_world_to_model(0.33f, Vec3(0.5f)));
+    EXPECT_THROW(capture_sky(m), Error);  // not relightable
+    nerf::RelightFields f;
+    f.config.grid = {2, 2, 10, 4, 1.5f};
+    f.config.width = 16;
+    f.config.hidden_layers = 1;
+    f.params.assign(nerf::make_intrinsic_layout(f.config, m.aabb_scale).total, 0.0f);
+    f.capture_env.width = 64;
+    f.capture_env.height = 32;
+    for (int j = 0; j < 32; ++j)
+        for (int i = 0; i < 64; ++i) {
+            const Vec3 d = nerf::env_texel_direction(64, 32, i, j);
+            f.capture_env.texels.push_back(Rgb(std::max(d.x, 0.0f), std::max(d.y, 0.0f), std::max(d.z, 0.0f)) +
+                                           Rgb(0.01f));
+        }
+    m.relight = f;
+    ASSERT_TRUE(m.relightable());
+    const Image sky = capture_sky(m, 128, 64);
+    const auto at = [&](Vec3 d) {
+        const Vec2 uv = lights::equirect_uv(d);
+        const float* p = sky.at(std::min(int(uv.x * 128), 127), std::min(int(uv.y * 64), 63));
+        return Rgb(p[0], p[1], p[2]);
+    };
+    // Texel centres lie within 2 degrees of these directions; bilinear taps of a 64x32 map: 0.06 covers both.
+    const Rgb up = at(Vec3(0, 1, 0)), z = at(Vec3(0, 0, 1)), x = at(Vec3(1, 0, 0));
+    EXPECT_NEAR(up.x, 1.01f, 0.06f);
+    EXPECT_NEAR(up.y, 0.01f, 0.06f);
+    EXPECT_NEAR(up.z, 0.01f, 0.06f);
+    EXPECT_NEAR(z.y, 1.01f, 0.06f);
+    EXPECT_NEAR(z.x, 0.01f, 0.06f);
+    EXPECT_NEAR(x.z, 1.01f, 0.06f);
+    EXPECT_NEAR(x.y, 0.01f, 0.06f);
+
+    // Written beside the model once, and named in the scene's "environment".
+    const fs::path dir = test::temp_dir();
+    const std::string name = write_capture_sky(dir / "relit.npt", m);
+    EXPECT_EQ(name, "relit.capture_sky.exr");
+    EXPECT_EQ(read_image(dir / name, false).width, 128);
+    EXPECT_EQ(write_capture_sky(dir / "plain.npt", nerf::create_model(c, 1.0f, m.world_to_model)), "");
+    ModelSceneOptions o;
+    o.environment_file = name;
+    EXPECT_EQ(model_scene_json("relit.npt", o)["environment"]["file"], name);
+    EXPECT_FALSE(model_scene_json("relit.npt", {}).contains("environment"));
 }
 
 }  // namespace
