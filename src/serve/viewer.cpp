@@ -418,13 +418,15 @@ void Viewer::render_preview(uint64_t client, PageView& v) {
     const auto t0 = Clock::now();
     Accumulator preview;
     preview.reset(o.width, o.height);
-    Image layer;  // render_frame's image is the renderer's own: not copied
-    const Image& pass = m_view == ViewLayer::beauty
-                            ? m_preview->render_frame(o)
-                            : (layer = render_view(*m_preview, o, false, v.depth_range), layer);
+    Image layer;
+    const Image* pass = &layer;
+    if (m_view == ViewLayer::beauty)
+        pass = &m_preview->render_frame(o);  // the renderer's own image: not copied
+    else
+        layer = render_view(*m_preview, o, false, v.depth_range);
     const double seconds = seconds_since(t0);
     const auto t1 = Clock::now();
-    preview.add(pass);
+    preview.add(*pass);
     send_frame(client, v, preview, true, seconds, double(o.width) * o.height, seconds_since(t1));
 }
 
@@ -432,14 +434,16 @@ void Viewer::render_pass(uint64_t client, PageView& v) {
     render::RenderOptions o = options_for(m_width, m_height, 1);
     o.seed = m_seed + uint64_t(v.film.passes());
     const auto t0 = Clock::now();
-    Image cpu_or_layer;  // render_frame's image is the renderer's own: not copied
     const bool cpu = m_options.backend == "cpu";
-    const Image& pass = m_view == ViewLayer::beauty && !cpu
-                            ? m_full->render_frame(o)
-                            : (cpu_or_layer = render_view(*m_full, o, cpu, v.depth_range), cpu_or_layer);
+    Image cpu_or_layer;
+    const Image* pass = &cpu_or_layer;
+    if (m_view == ViewLayer::beauty && !cpu)
+        pass = &m_full->render_frame(o);  // the renderer's own image: not copied
+    else
+        cpu_or_layer = render_view(*m_full, o, cpu, v.depth_range);
     const double seconds = seconds_since(t0);
     const auto t1 = Clock::now();
-    v.film.add(pass);
+    v.film.add(*pass);
     const double accumulate = seconds_since(t1);
     // At most ~30 frames a second: a GPU pass takes milliseconds and the page cannot show more.
     if (v.film.passes() == 1 || v.film.passes() >= m_target_spp || seconds_since(v.last_send) >= 1.0 / 30)
