@@ -99,7 +99,7 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
     cmd->footer(
         "Runs, in WORKDIR:\n"
         "  1 curate     VIDEO -> frames/ (nerfpt curate: sharpest frame per time window, subject check)\n"
-        "  2 poses      frames/ -> transforms.json (nerfpt poses: COLMAP, one shared OPENCV camera)\n"
+        "  2 poses      frames/ -> transforms.json (nerfpt poses: COLMAP, one shared camera, --camera-model)\n"
         "  3 object     the supporting plane, up and the object's box from COLMAP's points -> the object frame\n"
         "               the model carries (origin at the base centre, +Z up; metres with --height)\n"
         "  4 split      every --holdout-every'th frame -> transforms_test.json, the rest -> "
@@ -142,6 +142,7 @@ CLI::App* add_capture_command(CLI::App& app, CaptureArgs& args) {
         ->check(CLI::IsMember({"sequential", "exhaustive"}))
         ->capture_default_str();
     add_poses_quality_option(cmd, args.poses_quality, "poses: ");
+    add_camera_model_option(cmd, args.camera_model, "poses: ");
     cmd->add_option("--aabb-scale", args.aabb_scale, "poses: instant-ngp's scene extent in unit cubes")
         ->check(CLI::IsMember({1, 2, 4, 8, 16, 32, 64, 128}))
         ->capture_default_str();
@@ -299,12 +300,14 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         p.work = (work / "colmap").string();
         p.matcher = args.matcher;
         p.quality = args.poses_quality;
+        p.camera_model = args.camera_model;
         p.threads = args.threads;
         p.aabb_scale = args.aabb_scale;
         p.min_registered = args.min_registered;
         const Clock clock;
         const PosesSummary s = poses_stage(p, global, interrupts);
         record.finish("poses", {{"quality", args.poses_quality},
+                                {"camera_model", args.camera_model},
                                 {"max_num_features", s.max_num_features},
                                 {"frames", s.frames},
                                 {"registered", s.registered},

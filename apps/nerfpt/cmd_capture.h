@@ -24,6 +24,7 @@ struct CaptureArgs {
     // poses
     std::string matcher = "sequential";
     std::string poses_quality = "fast";  // capture::PosesQuality
+    std::string camera_model = "OPENCV";  // poses: COLMAP's camera model
     int aabb_scale = 16;
     double min_registered = 0.5;
     // object

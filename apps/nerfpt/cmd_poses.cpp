@@ -22,11 +22,21 @@ void add_poses_quality_option(CLI::App* cmd, std::string& quality, const std::st
         ->capture_default_str();
 }
 
+void add_camera_model_option(CLI::App* cmd, std::string& model, const std::string& prefix) {
+    cmd->add_option("--camera-model", model,
+                    prefix + "COLMAP's lens model for the one camera all frames share: OPENCV (fx, fy, cx, cy, "
+                             "k1, k2, p1, p2), RADIAL (one focal length f, cx, cy, k1, k2), SIMPLE_RADIAL (f, cx, "
+                             "cy, k1), PINHOLE (fx, fy, cx, cy) or SIMPLE_PINHOLE (f, cx, cy); 'nerfpt poses "
+                             "--help' says when to change it")
+        ->check(CLI::IsMember({"OPENCV", "RADIAL", "SIMPLE_RADIAL", "PINHOLE", "SIMPLE_PINHOLE"}))
+        ->capture_default_str();
+}
+
 CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
     CLI::App* cmd = app.add_subcommand("poses", "Recover camera poses of frames with COLMAP; write transforms.json");
     cmd->footer(
         "Runs the colmap command-line tool (Debian: apt-get install colmap; CPU only) in a work folder:\n"
-        "feature_extractor (one OPENCV camera shared by all frames), the sequential matcher (frames of a video,\n"
+        "feature_extractor (one camera shared by all frames, --camera-model), the sequential matcher (frames of a video,\n"
         "in name order, each with its next 15) or the exhaustive one, and the mapper; keeps the reconstruction\n"
         "with the most frames (fast and balanced then close its loops: frames whose cameras revisit an\n"
         "earlier view, 16 or more frames before, are matched with it and the mapper runs again), warns when\n"
@@ -47,6 +57,11 @@ CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
         "  best      COLMAP's own settings (up to 8192 features per frame, a global bundle adjustment every\n"
         "            10% of growth): what nerfpt ran before the option existed; slowest.\n"
         "Every quality passes --threads to each COLMAP step and matches each frame with its next 15.\n"
+        "--camera-model is the lens model COLMAP fits (one camera for all frames); transforms.json gets its\n"
+        "fl_x, fl_y, cx, cy, k1, k2, p1, p2 (terms the model lacks are 0; a one-focal model writes fl_x = fl_y).\n"
+        "OPENCV (default, as instant-ngp's colmap2nerf) fits fx and fy apart; RADIAL and SIMPLE_RADIAL fit one\n"
+        "focal length, as a phone's square pixels have; the PINHOLE models assume no distortion. Measured on\n"
+        "simulated handheld captures in docs/benchmarks.md ('One focal length or two').\n"
         "Example: nerfpt poses out/beer/frames -o out/beer/transforms.json");
     cmd->add_option("FRAMES", args.frames, "Folder of frames (.png/.jpg), e.g. written by 'nerfpt curate'")
         ->required();
@@ -64,6 +79,7 @@ CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
                     "Fraction of the frames that must be registered, 0..1 (default: 0.5)")
         ->check(CLI::Range(0.0, 1.0));
     add_poses_quality_option(cmd, args.quality, "");
+    add_camera_model_option(cmd, args.camera_model, "");
     cmd->add_option("--threads", args.threads, "COLMAP's threads for every step, 0 = all hardware threads")
         ->check(CLI::Range(0, 4096));
     return cmd;
@@ -86,6 +102,7 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
     s.max_image_size = args.max_image_size;
     s.quality = capture::parse_poses_quality(args.quality);
     s.threads = args.threads;
+    s.camera_model = args.camera_model;
     const capture::ColmapRun run = capture::run_colmap(args.frames, work, s, [&](const std::string& step) {
         if (!global.quiet) fmt::print(stderr, "poses: COLMAP {} ...\n", step);
     });
@@ -98,6 +115,14 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
     // CPU time beside wall time: on a shared machine only the first is comparable between runs.
     static const char* const k_steps[capture::k_colmap_steps] = {"extraction", "matching", "mapping",
                                                                  "loops"};
+    if (!run.model.cameras.empty()) {
+        const capture::ColmapCamera& c = run.model.cameras.front();
+        const capture::Intrinsics k = c.intrinsics();
+        fmt::print("  camera {} {}x{}: fx {:.2f}, fy {:.2f}, cx {:.2f}, cy {:.2f}, k1 {:.5f}, k2 {:.5f}, p1 {:.5f}, "
+                   "p2 {:.5f}\n",
+                   capture::camera_model_name(c.model), c.width, c.height, k.fx, k.fy, k.cx, k.cy, k.k1, k.k2,
+                   k.p1, k.p2);
+    }
     for (int i = 0; i < capture::k_colmap_steps; ++i) {
         if (i == 3 && run.loop_pairs == 0) continue;  // no loop closure: nothing revisited, or not asked for
         fmt::print("  {:<10} {:6.1f} s wall, {:6.1f} s CPU (load {:.2f} at start){}\n", k_steps[i],

@@ -15,6 +15,7 @@ struct PosesArgs {
     std::string work;  // empty: <output folder>/colmap
     std::string matcher = "sequential";
     std::string quality = "fast";  // capture::PosesQuality: fast, balanced, best
+    std::string camera_model = "OPENCV";  // COLMAP's camera model for the one shared camera
     int aabb_scale = 16;
     int max_image_size = 1600;
     double min_registered = 0.5;
@@ -23,6 +24,9 @@ struct PosesArgs {
 
 // --poses-quality, shared by `nerfpt poses` and `nerfpt capture`.
 void add_poses_quality_option(CLI::App* cmd, std::string& quality, const std::string& prefix);
+
+// --camera-model, shared by `nerfpt poses` and `nerfpt capture`.
+void add_camera_model_option(CLI::App* cmd, std::string& model, const std::string& prefix);
 
 CLI::App* add_poses_command(CLI::App& app, PosesArgs& args);
 int run_poses(const PosesArgs& args, const GlobalSettings& global, InterruptGuard& interrupts);

@@ -184,16 +184,19 @@ expect_error 2 "matcher" poses "$tmp/frames" -o "$tmp/transforms.json" --matcher
 # --poses-quality: documented, and anything but fast/balanced/best refused before COLMAP runs.
 run poses --help
 [[ $rc -eq 0 ]] || fail "poses --help: exit code $rc"
-for opt in --poses-quality fast balanced best --threads --matcher --min-registered; do
+for opt in --poses-quality fast balanced best --threads --matcher --min-registered --camera-model OPENCV RADIAL \
+    SIMPLE_RADIAL PINHOLE SIMPLE_PINHOLE; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt poses --help does not mention $opt"
 done
 expect_error 2 "--poses-quality.*fastest" poses "$tmp/frames" -o "$tmp/transforms.json" --poses-quality fastest
 expect_error 2 "--poses-quality" poses "$tmp/frames" -o "$tmp/transforms.json" --poses-quality
 expect_error 2 "--threads" poses "$tmp/frames" -o "$tmp/transforms.json" --threads -1
+# --camera-model: COLMAP's models that transforms.json can hold, by COLMAP's names; others refused up front.
+expect_error 2 "--camera-model.*FISHEYE" poses "$tmp/frames" -o "$tmp/transforms.json" --camera-model FISHEYE
 
 # capture: missing video, missing tools, a work folder that holds another video's capture, bad options.
 run capture --help
-for opt in --target-frames --matcher --poses-quality --holdout-every --train-time --train-steps --downscale \
+for opt in --target-frames --matcher --poses-quality --camera-model --holdout-every --train-time --train-steps --downscale \
     --turntable-frames --keep-scene --force; do
     grep -q -- "$opt" "$tmp/out" || fail "nerfpt capture --help does not mention $opt"
 done

@@ -530,6 +530,41 @@ TEST(TransformsWriter, OneCameraWritesGlobalIntrinsics) {
     EXPECT_FALSE(j["frames"][0].contains("fl_x"));
 }
 
+// `nerfpt poses --camera-model RADIAL`: one focal length and two radial terms reach transforms.json as
+// instant-ngp's colmap2nerf writes them (fl_x = fl_y, k1, k2, no tangential terms) and the trainer's loader.
+TEST(TransformsWriter, RadialCameraWritesOneFocalAndBothRadialTerms) {
+    const fs::path dir = test::temp_dir();
+    Ring ring = make_ring();
+    ring.model.cameras[0] = camera(1, CameraModel::radial, {5.25, 2, 2.1, -0.03, 0.004});
+    fs::create_directories(dir / "frames");
+    std::vector<uint8_t> px(4 * 4 * 3, 128);
+    for (const auto& im : ring.model.images)
+        ASSERT_TRUE(stbi_write_png((dir / "frames" / im.name).string().c_str(), 4, 4, 3, px.data(), 12));
+    TransformsSettings settings;
+    settings.images_folder = dir / "frames";
+    write_transforms(ring.model, dir / "transforms.json", settings);
+    const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "transforms.json"));
+    EXPECT_EQ(j["fl_x"], 5.25);
+    EXPECT_EQ(j["fl_y"], 5.25);
+    EXPECT_EQ(j["cx"], 2.0);
+    EXPECT_EQ(j["cy"], 2.1);
+    EXPECT_EQ(j["k1"], -0.03);
+    EXPECT_EQ(j["k2"], 0.004);
+    EXPECT_EQ(j["p1"], 0.0);
+    EXPECT_EQ(j["p2"], 0.0);
+
+    const nerf::Dataset ds = nerf::load_dataset(dir / "transforms.json", "");
+    ASSERT_EQ(ds.cameras.size(), 4u);
+    for (const auto& c : ds.cameras) {
+        EXPECT_FLOAT_EQ(c.fx, 5.25f);
+        EXPECT_FLOAT_EQ(c.fy, 5.25f);
+        EXPECT_FLOAT_EQ(c.k1, -0.03f);
+        EXPECT_FLOAT_EQ(c.k2, 0.004f);
+        EXPECT_EQ(c.p1, 0.0f);
+        EXPECT_EQ(c.p2, 0.0f);
+    }
+}
+
 TEST(TransformsWriter, BadInput) {
     const fs::path dir = test::temp_dir();
     test::expect_error_message([&] { nerf_poses(ColmapModel{}); }, {"COLMAP model", "no registered image"});
