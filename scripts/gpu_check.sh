@@ -18,9 +18,14 @@ mode=${1:-}
 unpacked=/tmp/nerfpt-gpu
 
 unpack() {
-    if [[ ! -x $unpacked/bin/nerfpt ]]; then
+    # Again when the bundle changed: a warm machine keeps the last call's binaries, which may be another bundle's.
+    local sum
+    sum=$(cksum <.gpu/bundle.tar.xz)
+    if [[ ! -x $unpacked/bin/nerfpt || $(cat $unpacked/.bundle_sum 2>/dev/null) != "$sum" ]]; then
+        rm -rf $unpacked
         mkdir -p $unpacked
         tar -xJf .gpu/bundle.tar.xz -C $unpacked
+        echo "$sum" >$unpacked/.bundle_sum
     fi
     export LD_LIBRARY_PATH="$unpacked/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
     export NERFPT_CLI=$unpacked/bin/nerfpt
