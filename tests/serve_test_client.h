@@ -1,5 +1,6 @@
 // A page of `nerfpt serve` for the C++ tests: a Boost.Beast WebSocket client that reads the server's
-// messages, JSON text or a frame (4-byte little-endian header length, the JSON header, a JPEG).
+// messages, JSON text or a frame (4-byte little-endian header length, the JSON header, a JPEG); a frame's pixel;
+// the serve test scene in a temporary folder.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -8,9 +9,16 @@
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/websocket.hpp>
+#include <turbojpeg.h>
+
+#include <array>
 #include <cstdint>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
+
+#include "test_support.h"
 
 namespace npt::test {
 
@@ -58,5 +66,37 @@ struct ServeClient {
         return until(type, [](const nlohmann::json&) { return true; });
     }
 };
+
+// A frame's pixel (x, y) as 8-bit RGB; a failure and {-1, -1, -1} outside it.
+inline std::array<int, 3> jpeg_pixel(const std::string& jpeg, int x, int y) {
+    tjhandle tj = tjInitDecompress();
+    int w = 0, h = 0, sub = 0, space = 0;
+    std::vector<unsigned char> rgb;
+    const auto* src = reinterpret_cast<const unsigned char*>(jpeg.data());
+    if (tjDecompressHeader3(tj, src, jpeg.size(), &w, &h, &sub, &space) == 0) {
+        rgb.resize(size_t(w) * h * 3);
+        tjDecompress2(tj, src, jpeg.size(), rgb.data(), w, 0, h, TJPF_RGB, 0);
+    }
+    tjDestroy(tj);
+    if (x >= w || y >= h) {
+        ADD_FAILURE() << "pixel " << x << "," << y << " outside the " << w << "x" << h << " frame";
+        return {-1, -1, -1};
+    }
+    const unsigned char* p = &rgb[(size_t(y) * w + x) * 3];
+    return {p[0], p[1], p[2]};
+}
+
+// The serve test scene (tests/data/serve: a wall and a cube) copied to a temporary folder; its scene.json. From
+// the source tree, or from the working tree the GPU machine runs in (scripts/gpu_check.sh runs from its root);
+// empty when neither has it.
+inline std::filesystem::path copy_serve_scene() {
+    namespace fs = std::filesystem;
+    fs::path src = test_data() / "serve";
+    if (!fs::exists(src)) src = fs::path("tests") / "data" / "serve";
+    if (!fs::exists(src)) return {};
+    const fs::path dir = temp_dir();
+    for (const auto& e : fs::directory_iterator(src)) fs::copy_file(e.path(), dir / e.path().filename());
+    return dir / "scene.json";
+}
 
 }  // namespace npt::test

@@ -4,12 +4,12 @@
 // links refused; byte ranges; one-line errors for folders that are not (finished) captures; and its model
 // standing in the view of the scene made for it.
 #include <gtest/gtest.h>
-#include <turbojpeg.h>
 
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <array>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -399,17 +399,7 @@ TEST(ServeCapture, TheTokenGuardsTheReportToo) {
 
 // The last frame's pixel (x, y) as 8-bit grey (the mean of R, G, B).
 int jpeg_grey(const std::string& jpeg, int x, int y) {
-    tjhandle tj = tjInitDecompress();
-    int w = 0, h = 0, sub = 0, space = 0;
-    std::vector<unsigned char> rgb;
-    const auto* src = reinterpret_cast<const unsigned char*>(jpeg.data());
-    if (tjDecompressHeader3(tj, src, jpeg.size(), &w, &h, &sub, &space) == 0) {
-        rgb.resize(size_t(w) * h * 3);
-        tjDecompress2(tj, src, jpeg.size(), rgb.data(), w, 0, h, TJPF_RGB, 0);
-    }
-    tjDestroy(tj);
-    if (x >= w || y >= h) return -1;
-    const unsigned char* p = &rgb[(size_t(y) * w + x) * 3];
+    const std::array<int, 3> p = test::jpeg_pixel(jpeg, x, y);
     return (p[0] + p[1] + p[2]) / 3;
 }
 

@@ -3,7 +3,6 @@
 // server goes on, a closed page freeing its session, the token, and an edit saved then rendered by `nerfpt
 // render` with the object where it was placed.
 #include <gtest/gtest.h>
-#include <turbojpeg.h>
 
 #include <array>
 #include <boost/asio/connect.hpp>
@@ -29,13 +28,6 @@ namespace beast = boost::beast;
 namespace http = beast::http;
 using tcp = asio::ip::tcp;
 using json = nlohmann::json;
-
-fs::path copy_serve_scene() {
-    const fs::path dir = test::temp_dir();
-    for (const auto& e : fs::directory_iterator(test::test_data() / "serve"))
-        fs::copy_file(e.path(), dir / e.path().filename());
-    return dir / "scene.json";
-}
 
 // A viewer and its server on a free port, served by a thread.
 struct Running {
@@ -63,6 +55,8 @@ struct Running {
 };
 
 using Client = test::ServeClient;
+using test::copy_serve_scene;
+using test::jpeg_pixel;
 
 int http_get(uint16_t port, const std::string& target, const std::string& host = {}) {
     asio::io_context ioc;
@@ -104,25 +98,6 @@ TEST(ServeServer, PageGetsStateAndFramesAndACameraMoveGivesANewFrame) {
     EXPECT_EQ(moved["width"], 80);
     EXPECT_TRUE(moved.contains("latency_ms"));
     EXPECT_GT(moved["samples_per_s"].get<double>(), 0.0);
-}
-
-// The last frame's pixel (x, y) as 8-bit RGB.
-std::array<int, 3> jpeg_pixel(const std::string& jpeg, int x, int y) {
-    tjhandle tj = tjInitDecompress();
-    int w = 0, h = 0, sub = 0, space = 0;
-    std::vector<unsigned char> rgb;
-    const auto* src = reinterpret_cast<const unsigned char*>(jpeg.data());
-    if (tjDecompressHeader3(tj, src, jpeg.size(), &w, &h, &sub, &space) == 0) {
-        rgb.resize(size_t(w) * h * 3);
-        tjDecompress2(tj, src, jpeg.size(), rgb.data(), w, 0, h, TJPF_RGB, 0);
-    }
-    tjDestroy(tj);
-    if (x >= w || y >= h) {
-        ADD_FAILURE() << "pixel " << x << "," << y << " outside the " << w << "x" << h << " frame";
-        return {-1, -1, -1};
-    }
-    const unsigned char* p = &rgb[(size_t(y) * w + x) * 3];
-    return {p[0], p[1], p[2]};
 }
 
 // The test scene's wall (z = -2, facing the camera at z = 5; the cube is left of centre) in each view, at the

@@ -143,33 +143,34 @@ void OptixRenderer::update(const scene::PoseChanges& changes) {
 
 Image OptixRenderer::render(const render::RenderOptions& options, const render::ProgressFn& progress,
                             Image* denoised, render::AovImages* aovs) {
-    const size_t pixels = size_t(m->width) * size_t(m->height);
-    cudaStream_t stream = m->stream.s;
-    std::unique_ptr<OptixDenoiserPass> denoiser;
-    DeviceBuffer<float4> albedo, normal;  // the denoiser's guides
-    if (denoised) {
-        denoiser = std::make_unique<OptixDenoiserPass>(m->ctx.get(), stream, m->width, m->height);
-        albedo.allocate(pixels, "the denoiser's guides", "--res");
-        normal.allocate(pixels, "the denoiser's guides", "--res");
-    }
-    const bool want_aovs = aovs && options.aovs != 0;
-    m->trace(options, progress, albedo.data(), normal.data(), want_aovs);
-    Image image(m->width, m->height, options.transparent ? 4 : 3);
-    if (want_aovs) *aovs = render::make_aov_images(m->width, m->height, options.aovs);
-    m->download(image, want_aovs ? aovs : nullptr);
-    if (denoiser) *denoised = denoiser->run(image, albedo.data(), normal.data());
+    Image image;
+    render_to(options, image, progress, denoised, aovs);
     return image;
 }
 
 void OptixRenderer::render_into(const render::RenderOptions& options, Image& out, const render::ProgressFn& progress,
                                 render::AovImages* aovs) {
+    render_to(options, out, progress, nullptr, aovs);
+}
+
+void OptixRenderer::render_to(const render::RenderOptions& options, Image& out, const render::ProgressFn& progress,
+                              Image* denoised, render::AovImages* aovs) {
+    const size_t pixels = size_t(m->width) * size_t(m->height);
+    std::unique_ptr<OptixDenoiserPass> denoiser;
+    DeviceBuffer<float4> albedo, normal;  // the denoiser's guides
+    if (denoised) {
+        denoiser = std::make_unique<OptixDenoiserPass>(m->ctx.get(), m->stream.s, m->width, m->height);
+        albedo.allocate(pixels, "the denoiser's guides", "--res");
+        normal.allocate(pixels, "the denoiser's guides", "--res");
+    }
+    const bool want_aovs = aovs && options.aovs != 0;
+    m->trace(options, progress, albedo.data(), normal.data(), want_aovs);
     const int channels = options.transparent ? 4 : 3;
     if (out.width != m->width || out.height != m->height || out.channels != channels)
-        out = Image(m->width, m->height, channels);
-    const bool want_aovs = aovs && options.aovs != 0;
-    m->trace(options, progress, nullptr, nullptr, want_aovs);
+        out = Image(m->width, m->height, channels);  // else its storage is reused
     if (want_aovs) *aovs = render::make_aov_images(m->width, m->height, options.aovs);
     m->download(out, want_aovs ? aovs : nullptr);
+    if (denoiser) *denoised = denoiser->run(out, albedo.data(), normal.data());
 }
 
 const Image& OptixRenderer::render_frame(const render::RenderOptions& options) {

@@ -37,6 +37,9 @@ class OptixRenderer {
     void update(const scene::PoseChanges& changes);
 
   private:
+    // render and render_into: into `out`, reused when it has the frame's size and channels.
+    void render_to(const render::RenderOptions& options, Image& out, const render::ProgressFn& progress,
+                   Image* denoised, render::AovImages* aovs);
     struct State;
     struct PinnedImage;
     std::unique_ptr<State> m;
