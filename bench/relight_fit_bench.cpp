@@ -3,11 +3,11 @@
 // issue 24): 2048 points on a sphere (exact normals, no shadows, no indirect light), a textured albedo, one
 // roughness, under a sky like the dev set's capture light (grey above, dark ground, a bright 34-degree emitter at
 // 58 degrees elevation) or a uniform white one. The targets integrate sky x BSDF x cosine over the hemisphere
-// (48 x 192 directions) with either the renderer's BSDF (`layered`: the relit volume's intrinsic_bsdf, whose
-// diffuse is darkened at grazing angles by the specular layer's Fresnel) or Cycles 3.4's Principled v1 diffuse
-// (`burley`: Burley's, brightened at grazing angles on rough surfaces) under the same GGX layer: how the dev
-// set's truth was rendered. Each row: the fit with one estimator, its relative albedo error after the
-// per-channel scale, and its mean roughness.
+// (48 x 192 directions) with the relit volume's intrinsic_bsdf and either diffuse lobe: `layered` (darkened at
+// grazing angles by the specular layer's Fresnel) or `burley` (Cycles 3.4's Principled v1 diffuse: brightened at
+// grazing angles on rough surfaces, beside the specular layer: how the dev set's truth was rendered). Each row:
+// the fit with one diffuse lobe and one estimator, its relative albedo error after the per-channel scale, and its
+// mean roughness.
 //   relight_fit_bench [--steps 1500]
 #include <cmath>
 #include <cstdio>
@@ -42,16 +42,7 @@ struct Sky {
     }
 };
 
-// Cycles' Principled v1 diffuse (Burley 2012), base / pi times the two grazing factors.
-Rgb burley_diffuse(Rgb base, float roughness, Vec3 wo, Vec3 wi) {
-    const Vec3 h = normalize(wo + wi);
-    const float hl = dot(h, wi);
-    const float fd90 = 0.5f + 2.0f * roughness * hl * hl;
-    const float fl = std::pow(1.0f - wi.z, 5.0f), fv = std::pow(1.0f - wo.z, 5.0f);
-    return base * float((1.0f + (fd90 - 1.0f) * fl) * (1.0f + (fd90 - 1.0f) * fv) / k_pi);
-}
-
-RelightSamples sphere_samples(float roughness, bool burley, const Sky& sky) {
+RelightSamples sphere_samples(float roughness, IntrinsicDiffuse diffuse, const Sky& sky) {
     constexpr int points = 2048, K = 8, n_theta = 48, n_phi = 192;
     RelightSamples s;
     s.directions = K;
@@ -78,8 +69,9 @@ RelightSamples sphere_samples(float roughness, bool burley, const Sky& sky) {
             s.indirect.push_back(Rgb(0.0f));
         }
         IntrinsicSample truth;
-        truth.albedo = burley ? Rgb(0.0f) : true_albedo(p);  // burley: the GGX layer alone, the diffuse added below
+        truth.albedo = true_albedo(p);
         truth.roughness = roughness;
+        truth.diffuse = diffuse;
         const materials::Bsdf b = intrinsic_bsdf(truth);
         const Frame frame = Frame::from_z(n);
         const Vec3 wo = frame.to_local(wo_w);
@@ -91,8 +83,7 @@ RelightSamples sphere_samples(float roughness, bool burley, const Sky& sky) {
                 const double ph = (q + 0.5) * 2 * k_pi / n_phi;
                 const Vec3 wi(float(std::sin(th) * std::cos(ph)), float(std::sin(th) * std::sin(ph)),
                               float(std::cos(th)));
-                Rgb f = materials::bsdf_eval(b, wo, wi);
-                if (burley) f += burley_diffuse(true_albedo(p), roughness, wo, wi);
+                const Rgb f = materials::bsdf_eval(b, wo, wi);
                 c += sky(frame.to_world(wi)) * f * float(wi.z * dw);
             }
         }
@@ -156,20 +147,24 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "relight_fit_bench: --steps must be >= 1\n");
         return 2;
     }
-    std::printf("| sky | truth's diffuse | true roughness | estimator | albedo error | mean fitted roughness |\n");
-    std::printf("|---|---|---|---|---|---|\n");
+    const auto name = [](IntrinsicDiffuse d) { return d == IntrinsicDiffuse::burley ? "Burley" : "layered"; };
+    std::printf("| sky | truth's diffuse | true roughness | fit's diffuse | estimator | albedo error | "
+                "mean fitted roughness |\n");
+    std::printf("|---|---|---|---|---|---|---|\n");
     for (const bool emitter : {false, true})
-        for (const bool burley : {false, true})
+        for (const IntrinsicDiffuse truth : {IntrinsicDiffuse::layered, IntrinsicDiffuse::burley})
             for (const float roughness : {0.35f, 0.75f}) {
                 Sky sky;
                 sky.emitter = emitter;
-                const RelightSamples s = sphere_samples(roughness, burley, sky);
+                const RelightSamples s = sphere_samples(roughness, truth, sky);
+                for (const IntrinsicDiffuse lobe : {IntrinsicDiffuse::layered, IntrinsicDiffuse::burley})
                 for (const SpecularEstimate est : {SpecularEstimate::sampled, SpecularEstimate::prefiltered}) {
                     RelightTrainSettings ts;
                     ts.intrinsic.grid = {6, 2, 14, 8, 1.5f};
                     ts.intrinsic.finest_resolution = 128.0f;
                     ts.intrinsic.width = 32;
                     ts.intrinsic.hidden_layers = 1;
+                    ts.intrinsic.diffuse = lobe;
                     ts.batch = 256;
                     ts.env_width = 32;
                     ts.env_height = 16;
@@ -183,8 +178,8 @@ int main(int argc, char** argv) {
                     fitted.relight = tr.fields(1.0);
                     double rough = 0;
                     const double err = relative_albedo_error(fitted.intrinsic(), s, &rough);
-                    std::printf("| %s | %s | %.2f | %s | %.1f%% | %.3f |\n", emitter ? "grey + emitter" : "white",
-                                burley ? "Burley (Cycles)" : "layered (ours)", roughness,
+                    std::printf("| %s | %s | %.2f | %s | %s | %.1f%% | %.3f |\n",
+                                emitter ? "grey + emitter" : "white", name(truth), roughness, name(lobe),
                                 est == SpecularEstimate::prefiltered ? "prefiltered" : "sampled", 100.0 * err, rough);
                     std::fflush(stdout);
                 }

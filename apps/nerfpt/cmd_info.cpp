@@ -233,9 +233,10 @@ void print_relight(const nerf::NerfModel& m) {
         return;
     }
     const nerf::RelightFields& r = *m.relight;
-    fmt::print("relight    yes: intrinsic grid {} levels x {}, 2^{} entries, MLP {}x{}; {} steps, {:.0f} s\n",
+    fmt::print("relight    yes: intrinsic grid {} levels x {}, 2^{} entries, MLP {}x{}; {} steps, {:.0f} s; {} diffuse\n",
                r.config.grid.levels, r.config.grid.features_per_level, r.config.grid.log2_table_size,
-               r.config.hidden_layers, r.config.width, r.steps, r.seconds);
+               r.config.hidden_layers, r.config.width, r.steps, r.seconds,
+               r.config.diffuse == nerf::IntrinsicDiffuse::burley ? "Burley (Cycles v1)" : "layered");
     const nerf::CaptureEnvironment& env = r.capture_env;
     Rgb mean(0.0f);
     double total = 0, best = -1;

@@ -115,6 +115,12 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "of it the directions find unshadowed: no sampling noise where nothing is in the way). "
                     "Default: 'ratio' with --relight-specular prefiltered, else 'sampled'")
         ->check(CLI::IsMember({"ratio", "sampled"}));
+    cmd->add_option("--relight-diffuse-lobe", args.relight_diffuse_lobe,
+                    "The diffuse part of the BSDF the model is fitted for and rendered with: 'burley' (the "
+                    "default: Cycles' Principled v1 diffuse, as Blender 3.x renders, brighter at grazing angles "
+                    "on rough surfaces) or 'layered' (a Lambertian base below the specular layer, darker at "
+                    "grazing angles; the first relightable models')")
+        ->check(CLI::IsMember({"burley", "layered"}));
     cmd->add_option("--relight-roughness-prior", args.relight.roughness_prior,
                     fmt::format("Weight of the prior that keeps each point's roughness near 0.5 where the "
                                 "capture light does not show it (default: {})",
@@ -333,6 +339,8 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
                                         ? (args.relight_specular == "prefiltered" ? "ratio" : "sampled")
                                         : args.relight_diffuse;
         ro.diffuse = diffuse == "ratio" ? nerf::DiffuseEstimate::ratio : nerf::DiffuseEstimate::sampled;
+        ro.diffuse_lobe =
+            args.relight_diffuse_lobe == "layered" ? nerf::IntrinsicDiffuse::layered : nerf::IntrinsicDiffuse::burley;
         ro.quiet = global.quiet;
         ro.backend = backend;
         interrupted = !run_relight_stage(model, data, ro, interrupts);

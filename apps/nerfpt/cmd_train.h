@@ -31,6 +31,7 @@ struct TrainArgs {
     std::string relight_normals = "depth";  // depth | density (nerf::NormalEstimator)
     std::string relight_specular = "sampled";  // sampled | prefiltered (nerf::SpecularEstimate)
     std::string relight_diffuse;                // sampled | ratio (nerf::DiffuseEstimate); "": as the specular
+    std::string relight_diffuse_lobe = "burley";  // burley | layered (nerf::IntrinsicDiffuse)
     bool force = false;
     // The command that continues after an interrupt, printed then; empty: this train command with --resume.
     std::string resume_hint;

@@ -53,6 +53,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ts.seed = model.config.training.seed;
     ts.intrinsic.grid.log2_table_size = options.table_log2;
     ts.intrinsic.finest_resolution = options.finest_resolution;
+    ts.intrinsic.diffuse = options.diffuse_lobe;
     ts.batch = options.batch ? options.batch : (gpu ? k_relight_batch_gpu : k_relight_batch_cpu);
     ts.specular = options.specular;
     ts.diffuse = options.diffuse;

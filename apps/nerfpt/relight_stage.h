@@ -37,6 +37,7 @@ struct RelightStageOptions {
     float normal_smoothing = nerf::RelightSampleSettings{}.normal_smoothing;
     nerf::SpecularEstimate specular = nerf::RelightTrainSettings{}.specular;
     nerf::DiffuseEstimate diffuse = nerf::RelightTrainSettings{}.diffuse;
+    nerf::IntrinsicDiffuse diffuse_lobe = nerf::IntrinsicConfig{}.diffuse;  // the BSDF the model is fitted for
     float roughness_prior = nerf::RelightTrainSettings{}.roughness_prior;
     float huber_delta = nerf::RelightTrainSettings{}.huber_delta;
     int borrowing_pixels = -1;  // -1: k_relight_pixels_* of the backend

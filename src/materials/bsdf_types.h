@@ -21,6 +21,9 @@ struct Bsdf {
     Rgb specular_color{1.0f};  // KHR_materials_specular specularColorFactor
     float transmission = 0.0f;
     float ior = 1.5f;
+    // Principled: the diffuse base as Cycles' Principled v1 (Blender <= 3.x) renders it: Burley's diffuse
+    // (brighter at grazing angles on rough surfaces), added beside the specular layer instead of below it.
+    bool burley_diffuse = false;
 };
 
 // For a delta sample, pdf is the discrete probability of the lobe and f * |wi.z| / pdf is the path weight.

@@ -18,6 +18,7 @@ struct Principled {
     float w_diffuse = 0.0f;  // (1 - metallic) (1 - transmission)
     float w_trans = 0.0f;    // (1 - metallic) transmission
     DielectricLobe inside;   // the interface as seen from inside the body (wo.z < 0)
+    float burley_roughness = -1.0f;  // >= 0: Burley's diffuse at this roughness (Bsdf::burley_diffuse)
 };
 
 NPT_HD NPT_INLINE Principled make_principled(const Bsdf& b) {
@@ -31,6 +32,7 @@ NPT_HD NPT_INLINE Principled make_principled(const Bsdf& b) {
     p.w_diffuse = (1.0f - m) * (1.0f - t);
     p.w_trans = (1.0f - m) * t;
     p.inside = {alpha, b.ior, b.specular, b.specular_color, b.base_color};
+    if (b.burley_diffuse) p.burley_roughness = clampf(b.roughness, 0.0f, 1.0f);
     return p;
 }
 
@@ -39,11 +41,23 @@ NPT_HD NPT_INLINE Rgb principled_layer_transmittance(const Principled& p, float 
     return Rgb(1.0f) - fresnel_schlick(p.f0_diel, c) * p.specular;
 }
 
-// Diffuse base below the specular layer, written in the reciprocal Kulla-Conty layering form
-// base/pi (1 - sF(mu_o)) (1 - sF(mu_i)) / (1 - sF_avg): its albedo is exactly base (1 - sF(mu_o)).
-NPT_HD NPT_INLINE Rgb principled_diffuse(const Principled& p, float mu_o, float mu_i) {
+// Burley's diffuse factor (Disney 2012) as Cycles writes it: Lambert's 1 darkened at grazing angles, plus a
+// retro-reflection that brightens them on rough surfaces; 2 cos^2(theta_d) = 1 + wo . wi.
+NPT_HD NPT_INLINE float burley_diffuse_factor(float roughness, Vec3 wo, Vec3 wi) {
+    const float mo = 1.0f - clampf(wo.z, 0.0f, 1.0f), mi = 1.0f - clampf(wi.z, 0.0f, 1.0f);
+    const float fo = sqr(sqr(mo)) * mo, fi = sqr(sqr(mi)) * mi;  // Schlick's (1 - cos)^5
+    const float rr = roughness * (1.0f + dot(wo, wi));
+    return (1.0f - 0.5f * fo) * (1.0f - 0.5f * fi) + rr * (fo + fi + fo * fi * (rr - 1.0f));
+}
+
+// The diffuse base. Layered (the default): below the specular layer, in the reciprocal Kulla-Conty layering
+// form base/pi (1 - sF(mu_o)) (1 - sF(mu_i)) / (1 - sF_avg), whose albedo is exactly base (1 - sF(mu_o)).
+// Burley (Bsdf::burley_diffuse): base/pi times burley_diffuse_factor, beside the specular layer.
+NPT_HD NPT_INLINE Rgb principled_diffuse(const Principled& p, Vec3 wo, Vec3 wi) {
+    if (p.burley_roughness >= 0.0f)
+        return p.base * (k_inv_pi * p.w_diffuse * burley_diffuse_factor(p.burley_roughness, wo, wi));
     Rgb avg = Rgb(1.0f) - fresnel_schlick_average(p.f0_diel) * p.specular;
-    Rgb num = principled_layer_transmittance(p, mu_o) * principled_layer_transmittance(p, mu_i);
+    Rgb num = principled_layer_transmittance(p, wo.z) * principled_layer_transmittance(p, wi.z);
     return p.base * k_inv_pi * p.w_diffuse * Rgb(num.x / avg.x, num.y / avg.y, num.z / avg.z);
 }
 
@@ -71,7 +85,8 @@ struct PrincipledLobeProbs {
 // scattering and diffuse) and the transmission, normalised.
 NPT_HD NPT_INLINE PrincipledLobeProbs principled_probs(const Principled& p, float mu_o) {
     float e = ggx_is_smooth(p.spec.alpha) ? 1.0f : ggx_albedo(p.spec.alpha, mu_o);
-    float base = luminance(p.base * principled_layer_transmittance(p, mu_o));
+    float base = p.burley_roughness >= 0.0f ? luminance(p.base)  // Burley's albedo is about base's
+                                            : luminance(p.base * principled_layer_transmittance(p, mu_o));
     float w_spec = e * luminance(ggx_reflection_fresnel(p.spec, mu_o));
     float w_cos = (1.0f - e) * luminance(ggx_reflection_ms_tint(p.spec)) + p.w_diffuse * base;
     float w_trans = p.w_trans * base;
@@ -86,7 +101,7 @@ NPT_HD NPT_INLINE PrincipledLobeProbs principled_probs(const Principled& p, floa
 NPT_HD NPT_INLINE Rgb principled_eval(const Principled& p, Vec3 wo, Vec3 wi) {
     if (wo.z < 0.0f) return p.w_trans > 0.0f ? dielectric_eval(p.inside, wo, wi) : Rgb(0.0f);
     if (wo.z == 0.0f) return Rgb(0.0f);
-    if (wi.z > 0.0f) return ggx_reflection_eval(p.spec, wo, wi) + principled_diffuse(p, wo.z, wi.z);
+    if (wi.z > 0.0f) return ggx_reflection_eval(p.spec, wo, wi) + principled_diffuse(p, wo, wi);
     if (p.w_trans <= 0.0f) return Rgb(0.0f);
     float pdf;
     return principled_btdf(p, wo, wi, &pdf);

@@ -38,6 +38,7 @@ IntrinsicLayout make_intrinsic_layout(const IntrinsicConfig& config, float aabb_
     l.total = l.grid_offset + l.grid.param_count();
     l.aabb_min = Vec3(0.5f - 0.5f * aabb_scale);
     l.inv_aabb_scale = 1.0f / aabb_scale;
+    l.diffuse = config.diffuse;
     return l;
 }
 

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <stdexcept>
 
 #include "core/error.h"
 #include "core/rng.h"
@@ -85,6 +86,8 @@ TEST(RelightSection, RoundTripsThroughTheModelFile) {
     EXPECT_EQ(b.exposure[2].x, 2.0f);
     EXPECT_EQ(b.steps, 12u);
     EXPECT_EQ(b.config.width, 16);
+    EXPECT_EQ(b.config.diffuse, IntrinsicDiffuse::burley);
+    EXPECT_EQ(back.intrinsic().query(Vec3(0.5f)).diffuse, IntrinsicDiffuse::burley);
     // The query sees the same network.
     const Vec3 p(0.3f, 0.6f, 0.45f);
     const IntrinsicSample qa = m.intrinsic().query(p), qb = back.intrinsic().query(p);
@@ -137,6 +140,45 @@ TEST(RelightSection, BadPayloadsAreOneLineErrors) {
     bad.insert(bad.end(), text.begin(), text.end());
     bad.insert(bad.end(), good.begin() + 8 + len, good.end());
     fails(bad, "'levels' is 99");
+}
+
+// The header with its text edited (same payload after it).
+std::vector<uint8_t> with_header(const std::vector<uint8_t>& good, const std::string& from, const std::string& to) {
+    uint64_t len;
+    std::memcpy(&len, good.data(), 8);
+    std::string text(reinterpret_cast<const char*>(good.data() + 8), size_t(len));
+    const size_t at = text.find(from);
+    if (at == std::string::npos) throw std::runtime_error("no '" + from + "' in the header");
+    text.replace(at, from.size(), to);
+    std::vector<uint8_t> out(8);
+    const uint64_t nl = text.size();
+    std::memcpy(out.data(), &nl, 8);
+    out.insert(out.end(), text.begin(), text.end());
+    out.insert(out.end(), good.begin() + 8 + std::ptrdiff_t(len), good.end());
+    return out;
+}
+
+// The first relightable models' header has no "diffuse": they keep the layered lobe they were fitted with.
+TEST(RelightSection, TheDiffuseLobeIsReadAndOldModelsStayLayered) {
+    RelightFields f = random_fields(1.0f);
+    f.config.diffuse = IntrinsicDiffuse::layered;
+    std::vector<uint8_t> bytes = encode_relight_section(f, 1.0f);
+    EXPECT_EQ(decode_relight_section(bytes.data(), bytes.size(), "m.npt", 1.0f).config.diffuse,
+              IntrinsicDiffuse::layered);
+    f.config.diffuse = IntrinsicDiffuse::burley;
+    const std::vector<uint8_t> good = encode_relight_section(f, 1.0f);
+    EXPECT_EQ(decode_relight_section(good.data(), good.size(), "m.npt", 1.0f).config.diffuse,
+              IntrinsicDiffuse::burley);
+    bytes = with_header(good, ",\"diffuse\":\"burley\"", "");
+    EXPECT_EQ(decode_relight_section(bytes.data(), bytes.size(), "m.npt", 1.0f).config.diffuse,
+              IntrinsicDiffuse::layered);
+    bytes = with_header(good, "\"diffuse\":\"burley\"", "\"diffuse\":\"lambert\"");
+    try {
+        decode_relight_section(bytes.data(), bytes.size(), "m.npt", 1.0f);
+        ADD_FAILURE() << "accepted an unknown diffuse lobe";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("'diffuse'"), std::string::npos) << e.what();
+    }
 }
 
 TEST(IntrinsicField, QueryMatchesTheTrainersBatchedNetwork) {
@@ -193,6 +235,7 @@ RelightSamples synthetic_samples(int points, int K, bool shadows) {
         IntrinsicSample truth;
         truth.albedo = true_albedo(p);
         truth.roughness = 0.5f;
+        truth.diffuse = IntrinsicConfig{}.diffuse;  // the fit's lobe (recovery_settings, small_intrinsic)
         const materials::Bsdf bsdf = intrinsic_bsdf(truth);
         Rgb c(0.0f);
         for (int k = 0; k < K; ++k) {
@@ -215,11 +258,13 @@ RelightSamples synthetic_samples(int points, int K, bool shadows) {
 // Every pairing of the shading estimators (relight_trainer.h): the sums over the directions, the diffuse ratio,
 // the specular split sum.
 void expect_gradient_matches_finite_differences(SpecularEstimate estimate, DiffuseEstimate diffuse,
-                                                float huber_delta = 0.0f) {
+                                                float huber_delta = 0.0f,
+                                                IntrinsicDiffuse lobe = IntrinsicDiffuse::burley) {
     const NerfModel m = small_model();
     const RelightSamples s = synthetic_samples(64, 8, true);
     RelightTrainSettings ts;
     ts.intrinsic = small_intrinsic();
+    ts.intrinsic.diffuse = lobe;
     ts.batch = 64;
     ts.env_width = 8;
     ts.env_height = 4;
@@ -268,6 +313,14 @@ TEST(RelightTrainer, PrefilteredGradientMatchesFiniteDifferencesOfItsObjective) 
 
 TEST(RelightTrainer, DiffuseRatioWithSampledSpecularGradientMatchesFiniteDifferences) {
     expect_gradient_matches_finite_differences(SpecularEstimate::sampled, DiffuseEstimate::ratio);
+}
+
+// The layered diffuse (the first relightable models'), whose ratio weights do not depend on the roughness.
+TEST(RelightTrainer, LayeredDiffuseGradientMatchesFiniteDifferences) {
+    expect_gradient_matches_finite_differences(SpecularEstimate::prefiltered, DiffuseEstimate::ratio, 0.0f,
+                                               IntrinsicDiffuse::layered);
+    expect_gradient_matches_finite_differences(SpecularEstimate::sampled, DiffuseEstimate::sampled, 0.0f,
+                                               IntrinsicDiffuse::layered);
 }
 
 // A threshold well inside the residuals this fit has after 20 steps, so that both branches are taken.
@@ -350,6 +403,7 @@ struct ExactShading {
         one.roughness = zero.roughness = roughness;
         one.albedo = Rgb(1.0f);
         zero.albedo = Rgb(0.0f);
+        one.diffuse = zero.diffuse = IntrinsicConfig{}.diffuse;  // the fit's lobe (recovery_settings)
         const materials::Bsdf b1 = intrinsic_bsdf(one), b0 = intrinsic_bsdf(zero);
         constexpr int n_theta = 128, n_phi = 512;
         for (int m = 0; m < n_mu; ++m) {
@@ -421,10 +475,12 @@ TEST(RelightTrainer, PrefilteredSpecularRecoversAGlossyAlbedo) {
         std::printf("roughness %.1f: relative albedo error: prefiltered %.4f, sampled %.4f; mean roughness %.3f / "
                     "%.3f\n",
                     roughness, pre.albedo_error, sampled.albedo_error, pre.roughness, sampled.roughness);
-        // The bound is not derived: 0.053 (roughness 0.3) and 0.061 (0.6) were measured, against 0.49 and 0.32
-        // sampled; 0.08 is the fit's own bound on exact targets (0.05, RecoversAKnownAlbedo...) with room for
-        // the tables and the separable diffuse. The second check is the one that says what the estimator is for.
-        EXPECT_LT(pre.albedo_error, 0.08) << "roughness " << roughness;
+        // The bound is not derived. With the layered diffuse 0.053 (roughness 0.3) and 0.061 (0.6) were
+        // measured, against 0.49 and 0.32 sampled; with Burley's (the default lobe) 0.048 and 0.093, against
+        // 0.24 and 0.23: under a uniform sky its roughness-dependent grazing brightness trades against the
+        // albedo point by point. 0.12 is the fit's own bound on exact targets (0.05, RecoversAKnownAlbedo...)
+        // with room for the tables and that trade. The second check is the one that says what the estimator is for.
+        EXPECT_LT(pre.albedo_error, 0.12) << "roughness " << roughness;
         EXPECT_LT(pre.albedo_error, 0.5 * sampled.albedo_error) << "roughness " << roughness;
     }
 }

@@ -21,6 +21,10 @@ namespace npt::nerf {
 constexpr int k_intrinsic_outputs = 7;
 constexpr float k_min_roughness = 0.05f;
 
+// The diffuse lobe of the shading BSDF (materials/principled.h): `layered` below the specular layer (the models
+// of the first relight section, whose header does not say), or `burley`, Cycles' Principled v1 diffuse beside it.
+enum class IntrinsicDiffuse : uint8_t { layered, burley };
+
 struct IntrinsicLayout {
     HashGridConfig grid;  // per_level_scale resolved for the model's aabb_scale
     MlpShape mlp;         // inputs: grid.output_dims(); outputs: k_intrinsic_outputs
@@ -28,6 +32,7 @@ struct IntrinsicLayout {
     // As NerfLayout: the grid covers the model's aabb (0.5 -+ aabb_scale / 2).
     Vec3 aabb_min{0.0f, 0.0f, 0.0f};
     float inv_aabb_scale = 1.0f;
+    IntrinsicDiffuse diffuse = IntrinsicDiffuse::layered;
     NPT_HD NPT_INLINE Vec3 grid_position(Vec3 p) const { return (p - aabb_min) * inv_aabb_scale; }
 };
 
@@ -35,6 +40,7 @@ struct IntrinsicSample {
     Rgb albedo{0.5f};
     float roughness = 0.5f;
     Vec3 normal{0.0f, 0.0f, 1.0f};  // model space, unit length; not yet turned toward the viewer
+    IntrinsicDiffuse diffuse = IntrinsicDiffuse::layered;  // the model's, for intrinsic_bsdf
 };
 
 NPT_HD NPT_INLINE float intrinsic_sigmoid(float x) { return 1.0f / (1.0f + expf(-x)); }
@@ -67,13 +73,15 @@ struct IntrinsicFieldView {
         for (int i = 0; i < k_intrinsic_outputs; ++i) out[i] = 0.0f;
         hash_encode(layout.grid, levels, params + layout.grid_offset, layout.grid_position(p), enc);
         mlp_forward(layout.mlp, params + layout.mlp_offset, enc, out);
-        return intrinsic_from_outputs(out);
+        IntrinsicSample s = intrinsic_from_outputs(out);
+        s.diffuse = layout.diffuse;
+        return s;
     }
 };
 
 // The BSDF a relit scattering event is shaded with: glTF's dielectric metallic-roughness (metallic 0, IOR 1.5,
-// so F0 = 0.04) with the sample's albedo as base colour: the materials/ Principled code evaluates and samples it
-// in the normal's frame.
+// so F0 = 0.04) with the sample's albedo as base colour and the model's diffuse lobe: the materials/ Principled
+// code evaluates and samples it in the normal's frame.
 NPT_HD NPT_INLINE materials::Bsdf intrinsic_bsdf(const IntrinsicSample& s) {
     materials::Bsdf b;
     b.kind = materials::BsdfKind::Principled;
@@ -84,6 +92,7 @@ NPT_HD NPT_INLINE materials::Bsdf intrinsic_bsdf(const IntrinsicSample& s) {
     b.specular_color = Rgb(1.0f);
     b.transmission = 0.0f;
     b.ior = 1.5f;
+    b.burley_diffuse = s.diffuse == IntrinsicDiffuse::burley;
     return b;
 }
 

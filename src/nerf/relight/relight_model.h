@@ -16,6 +16,9 @@ struct IntrinsicConfig {
     float finest_resolution = 1024.0f;          // times aabb_scale, as EncodingConfig
     int width = 64;
     int hidden_layers = 2;
+    // New models shade with Burley's diffuse, as the Cycles renders the dev set was made with; the section's
+    // header says which (absent: layered, the first models).
+    IntrinsicDiffuse diffuse = IntrinsicDiffuse::burley;
 };
 
 // The capture environment: equirectangular in MODEL space directions, rows from +Z (v = 0) to -Z (v = 1),

@@ -55,7 +55,8 @@ std::vector<uint8_t> encode_relight_section(const RelightFields& f, float aabb_s
           {"base_resolution", f.config.grid.base_resolution},
           {"finest_resolution", f.config.finest_resolution},
           {"width", f.config.width},
-          {"hidden_layers", f.config.hidden_layers}}},
+          {"hidden_layers", f.config.hidden_layers},
+          {"diffuse", f.config.diffuse == IntrinsicDiffuse::burley ? "burley" : "layered"}}},
         {"parameters", f.params.size()},
         {"environment", {f.capture_env.width, f.capture_env.height}},
         {"exposures", f.exposure.size()},
@@ -103,6 +104,13 @@ RelightFields decode_relight_section(const uint8_t* data, size_t size, const std
     f.config.finest_resolution = float(get_number(ic, "finest_resolution", 1.0, 1 << 16, iw));
     f.config.width = get_int(ic, "width", 1, k_max_mlp_width, iw);
     f.config.hidden_layers = get_int(ic, "hidden_layers", 1, 8, iw);
+    f.config.diffuse = IntrinsicDiffuse::layered;  // the first relightable models do not say
+    if (ic.contains("diffuse")) {
+        const json& d = ic["diffuse"];
+        if (!d.is_string() || (d != "burley" && d != "layered"))
+            throw Error(iw + ": field 'diffuse' must be \"burley\" or \"layered\"");
+        f.config.diffuse = d == "burley" ? IntrinsicDiffuse::burley : IntrinsicDiffuse::layered;
+    }
     if (f.config.grid.levels * f.config.grid.features_per_level > k_max_mlp_width)
         throw Error(iw + ": levels x features_per_level exceeds " + std::to_string(k_max_mlp_width));
     if (!h.contains("environment") || !h["environment"].is_array() || h["environment"].size() != 2)

@@ -85,9 +85,10 @@ inline LobeLight lobe_light(const RelightSamples& S, uint32_t point, const float
     return l;
 }
 
-inline BsdfSplit split_bsdf(float roughness, Vec3 wo, Vec3 wi) {
+inline BsdfSplit split_bsdf(float roughness, IntrinsicDiffuse diffuse, Vec3 wo, Vec3 wi) {
     IntrinsicSample s;
     s.roughness = roughness;
+    s.diffuse = diffuse;
     s.albedo = Rgb(1.0f);
     const float f1 = materials::bsdf_eval(intrinsic_bsdf(s), wo, wi).x;
     s.albedo = Rgb(0.0f);
@@ -112,9 +113,10 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
     for (uint32_t img : samples.image)
         if (img >= image_count) throw Error("relight: a point refers to image " + std::to_string(img));
     if (settings.specular == SpecularEstimate::prefiltered || settings.diffuse == DiffuseEstimate::ratio) {
-        m_albedo_table = std::make_shared<const DirectionalAlbedoTable>();
-        IntrinsicSample white;  // the diffuse lobe per unit base colour (it does not depend on the roughness)
+        m_albedo_table = std::make_shared<const DirectionalAlbedoTable>(settings.intrinsic.diffuse);
+        IntrinsicSample white;  // the diffuse lobe per unit base colour (Burley's: its roughness set per point)
         white.albedo = Rgb(1.0f);
+        white.diffuse = settings.intrinsic.diffuse;
         m_diffuse_lobe = materials::make_principled(intrinsic_bsdf(white));
         m_prefilter = std::make_shared<const EnvPrefilter>(settings.env_width, settings.env_height);
     }
@@ -194,6 +196,14 @@ RelightStepStats RelightTrainer::compute_gradient() {
     const float inv_batch = 1.0f / float(batch);
     const float dir_weight = k_two_pi / float(K);
     const float huber = m_settings.huber_delta;
+    const IntrinsicDiffuse diffuse_lobe = m_settings.intrinsic.diffuse;
+    const bool burley = diffuse_lobe == IntrinsicDiffuse::burley;  // the diffuse lobe depends on the roughness
+    // The ratio estimator's weight of a direction: the diffuse lobe per unit base colour at a roughness.
+    const auto diffuse_weight = [&](float rough, Vec3 wo, Vec3 wi) {
+        materials::Principled lobe = m_diffuse_lobe;
+        if (burley) lobe.burley_roughness = rough;
+        return materials::principled_diffuse(lobe, wo, wi).x;
+    };
 
     tbb::parallel_for(size_t(0), n_chunks, [&](size_t c) {
         Chunk& ch = chunks[c];
@@ -233,6 +243,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
             // directions find unshadowed, num / den (exactly 1 where nothing is in the way); plus their
             // indirect light. (On the glossy test sphere the directions' own sum left 24% albedo error, this 5%.)
             Rgb num(0.0f), den(0.0f), indirect_d(0.0f);
+            Rgb num2(0.0f), den2(0.0f), indirect_d2(0.0f);  // at r2, for Burley's roughness-dependent lobe
             for (int k = 0; k < K; ++k) {
                 const size_t sk = size_t(L) * K + k;
                 const Vec3 wi = frame.to_local(S.dir[sk]);
@@ -245,14 +256,20 @@ RelightStepStats RelightTrainer::compute_gradient() {
                 const float w = dir_weight * wi.z;
                 wk[k] = w;
                 if (ratio_diffuse) {
-                    const float g = materials::principled_diffuse(m_diffuse_lobe, wo.z, wi.z).x * w;
+                    const float g = diffuse_weight(r, wo, wi) * w;
                     gk[k] = g;
                     num += le * (S.visibility[sk] * g);
                     den += le * g;
                     indirect_d += S.indirect[sk] * g;
+                    if (burley) {
+                        const float g2 = diffuse_weight(r2, wo, wi) * w;
+                        num2 += le * (S.visibility[sk] * g2);
+                        den2 += le * g2;
+                        indirect_d2 += S.indirect[sk] * g2;
+                    }
                 }
                 if (ratio_diffuse && lobe_specular) continue;
-                const BsdfSplit f = split_bsdf(r, wo, wi), f2 = split_bsdf(r2, wo, wi);
+                const BsdfSplit f = split_bsdf(r, diffuse_lobe, wo, wi), f2 = split_bsdf(r2, diffuse_lobe, wo, wi);
                 if (!ratio_diffuse) {
                     acc_d += lin[k] * (f.diffuse * w);
                     acc_d2 += lin[k] * (f2.diffuse * w);
@@ -269,7 +286,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
             EnvPrefilter::Taps spec_taps{};
             float spec_scale = 0.0f;  // dC_specular / dL_prefiltered
             if (ratio_diffuse && wo.z > 0.0f) {
-                e_diffuse = m_albedo_table->diffuse(wo.z);
+                e_diffuse = m_albedo_table->diffuse(wo.z, r);
                 cos_taps = m_prefilter->cosine_taps(S.normal[L]);
                 Rgb lc(0.0f);
                 for (int j = 0; j < 4; ++j) lc += env_levels[cos_taps.index[j]] * cos_taps.weight[j];
@@ -277,7 +294,13 @@ RelightStepStats RelightTrainer::compute_gradient() {
                 for (int ch3 = 0; ch3 < 3; ++ch3)
                     if (den[ch3] > 0.0f) ratio[ch3] = num[ch3] / den[ch3];
                 acc_d = unshadowed * ratio + indirect_d;
-                acc_d2 = acc_d;  // the diffuse factor does not depend on the roughness
+                acc_d2 = acc_d;  // the layered diffuse factor does not depend on the roughness
+                if (burley) {
+                    Rgb ratio2(1.0f);
+                    for (int ch3 = 0; ch3 < 3; ++ch3)
+                        if (den2[ch3] > 0.0f) ratio2[ch3] = num2[ch3] / den2[ch3];
+                    acc_d2 = lc * m_albedo_table->diffuse(wo.z, r2) * ratio2 + indirect_d2;
+                }
             }
             if (lobe_specular && wo.z > 0.0f) {
                 const Vec3 wr = S.normal[L] * (2.0f * wo.z) - wo_w;
@@ -360,7 +383,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
                                                     : 0.0f;
                 }
                 if ((!ratio_diffuse || !lobe_specular) && S.visibility[sk] > 0.0f) {
-                    const BsdfSplit f = split_bsdf(r, wo, frame.to_local(S.dir[sk]));
+                    const BsdfSplit f = split_bsdf(r, diffuse_lobe, wo, frame.to_local(S.dir[sk]));
                     const float f_d = ratio_diffuse ? 0.0f : f.diffuse, f_s = lobe_specular ? 0.0f : f.specular;
                     for (int ch3 = 0; ch3 < 3; ++ch3)
                         d_le[ch3] += d_c[ch3] * e * (is.albedo[ch3] * f_d + f_s) * wk[k] * S.visibility[sk];

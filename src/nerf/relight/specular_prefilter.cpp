@@ -22,14 +22,15 @@ constexpr float k_level_width[EnvPrefilter::k_levels] = {0.0f, 0.1f, 0.2f, 0.4f,
 
 }  // namespace
 
-DirectionalAlbedoTable::DirectionalAlbedoTable() : m_diffuse(k_n), m_specular(size_t(k_n) * k_n) {
+DirectionalAlbedoTable::DirectionalAlbedoTable(IntrinsicDiffuse diffuse)
+    : m_diffuse(size_t(k_n) * k_n), m_specular(size_t(k_n) * k_n) {
     constexpr int k_samples = 1024, k_side = 32;  // stratified 32 x 32
-    std::vector<double> diffuse(k_n, 0.0);
     for (int j = 0; j < k_n; ++j) {
         IntrinsicSample one, zero;
         one.roughness = zero.roughness = table_roughness(j, k_n);
         one.albedo = Rgb(1.0f);
         zero.albedo = Rgb(0.0f);
+        one.diffuse = zero.diffuse = diffuse;
         const materials::Bsdf b1 = intrinsic_bsdf(one), b0 = intrinsic_bsdf(zero);
         for (int i = 0; i < k_n; ++i) {
             const float mu = table_mu(i, k_n);
@@ -49,28 +50,40 @@ DirectionalAlbedoTable::DirectionalAlbedoTable() : m_diffuse(k_n), m_specular(si
                 e += double(f0) * bs.wi.z / pdf;
             }
             m_specular[size_t(j) * k_n + size_t(i)] = float(e / k_samples);
-            diffuse[size_t(i)] += d / k_samples / k_n;  // the same at every roughness: averaged over them
+            m_diffuse[size_t(j) * k_n + size_t(i)] = float(d / k_samples);
         }
     }
-    for (int i = 0; i < k_n; ++i) m_diffuse[size_t(i)] = float(diffuse[size_t(i)]);
+    if (diffuse == IntrinsicDiffuse::layered) {  // the same at every roughness: averaged over them (less noise)
+        for (int i = 0; i < k_n; ++i) {
+            double mean = 0;
+            for (int j = 0; j < k_n; ++j) mean += m_diffuse[size_t(j) * k_n + size_t(i)];
+            for (int j = 0; j < k_n; ++j) m_diffuse[size_t(j) * k_n + size_t(i)] = float(mean / k_n);
+        }
+    }
 }
 
-float DirectionalAlbedoTable::diffuse(float mu_o) const {
-    const float x = std::clamp((mu_o - k_mu_min) / (1.0f - k_mu_min), 0.0f, 1.0f) * float(k_n - 1);
-    const int x0 = std::min(int(x), k_n - 2);
-    const float ax = x - float(x0);
-    return (1 - ax) * m_diffuse[size_t(x0)] + ax * m_diffuse[size_t(x0) + 1];
+namespace {
+
+// Bilinear in (mu_o, roughness) over a [roughness index * k_n + mu index] table of n x n.
+float lookup(const std::vector<float>& table, int n, float mu_o, float roughness) {
+    const float x = std::clamp((mu_o - k_mu_min) / (1.0f - k_mu_min), 0.0f, 1.0f) * float(n - 1);
+    const float y =
+        std::clamp((roughness - k_min_roughness) / (1.0f - k_min_roughness), 0.0f, 1.0f) * float(n - 1);
+    const int x0 = std::min(int(x), n - 2), y0 = std::min(int(y), n - 2);
+    const float ax = x - float(x0), ay = y - float(y0);
+    const auto at = [&](int xi, int yi) { return table[size_t(yi) * size_t(n) + size_t(xi)]; };
+    return (1 - ay) * ((1 - ax) * at(x0, y0) + ax * at(x0 + 1, y0)) +
+           ay * ((1 - ax) * at(x0, y0 + 1) + ax * at(x0 + 1, y0 + 1));
+}
+
+}  // namespace
+
+float DirectionalAlbedoTable::diffuse(float mu_o, float roughness) const {
+    return lookup(m_diffuse, k_n, mu_o, roughness);
 }
 
 float DirectionalAlbedoTable::specular(float mu_o, float roughness) const {
-    const float x = std::clamp((mu_o - k_mu_min) / (1.0f - k_mu_min), 0.0f, 1.0f) * float(k_n - 1);
-    const float y =
-        std::clamp((roughness - k_min_roughness) / (1.0f - k_min_roughness), 0.0f, 1.0f) * float(k_n - 1);
-    const int x0 = std::min(int(x), k_n - 2), y0 = std::min(int(y), k_n - 2);
-    const float ax = x - float(x0), ay = y - float(y0);
-    const auto at = [&](int xi, int yi) { return m_specular[size_t(yi) * k_n + size_t(xi)]; };
-    return (1 - ay) * ((1 - ax) * at(x0, y0) + ax * at(x0 + 1, y0)) +
-           ay * ((1 - ax) * at(x0, y0 + 1) + ax * at(x0 + 1, y0 + 1));
+    return lookup(m_specular, k_n, mu_o, roughness);
 }
 
 float specular_lobe_width(float roughness, float mu_o) {

@@ -12,21 +12,23 @@
 #include <vector>
 
 #include "core/vec.h"
+#include "nerf/relight/intrinsic_field.h"
 
 namespace npt::nerf {
 
-// The directional albedos of intrinsic_bsdf for a view at cosine mu_o to the normal: the integral over the
-// hemisphere of cos(theta_i) times its diffuse factor (per unit base colour: the layered diffuse below the
-// specular layer, which does not depend on the roughness) and times its specular part, at roughness r.
+// The directional albedos of intrinsic_bsdf (with the given diffuse lobe) for a view at cosine mu_o to the
+// normal, at roughness r: the integral over the hemisphere of cos(theta_i) times its diffuse factor (per unit
+// base colour; Burley's depends on the roughness, the layered one does not) and times its specular part.
 class DirectionalAlbedoTable {
   public:
-    DirectionalAlbedoTable();  // 32 x 32 entries, 1024 BSDF samples each (fixed seed): tens of milliseconds
-    float diffuse(float mu_o) const;                    // linear in mu_o
+    // 32 x 32 entries, 1024 BSDF samples each (fixed seed): tens of milliseconds.
+    explicit DirectionalAlbedoTable(IntrinsicDiffuse diffuse);
+    float diffuse(float mu_o, float roughness) const;   // bilinear
     float specular(float mu_o, float roughness) const;  // bilinear
 
   private:
     static constexpr int k_n = 32;
-    std::vector<float> m_diffuse;   // [mu index]
+    std::vector<float> m_diffuse;   // [roughness index * k_n + mu index]
     std::vector<float> m_specular;  // [roughness index * k_n + mu index]
 };
 
