@@ -150,11 +150,12 @@ int run_render_sequence(const RenderArgs& args, const GlobalSettings& global, In
         Progress progress(ps, std::cerr);
         const auto t0 = std::chrono::steady_clock::now();
         auto aovs = std::make_shared<render::AovImages>();
-        std::shared_ptr<Image> rendered = images.take();
+        std::shared_ptr<ImagePool::Slot> slot = images.take();
         renderer->render_into(
-            frame_options, *rendered, [&progress](uint64_t d, uint64_t total) { progress.update(d, total); },
+            frame_options, slot->image, [&progress](uint64_t d, uint64_t total) { progress.update(d, total); },
             aovs.get());
-        std::shared_ptr<const Image> image = std::move(rendered);
+        if (!slot->pin) slot->pin = renderer->pin(slot->image);  // sized now; the next frames download faster
+        std::shared_ptr<const Image> image(slot, &slot->image);
         progress.finish();
         render_s += since(t0);
         const ExrMetadata meta =

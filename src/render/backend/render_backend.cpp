@@ -89,6 +89,7 @@ class OptixSceneRenderer final : public SceneRenderer {
                      AovImages* aovs) override {
         m_renderer.render_into(resolved, out, progress, aovs);
     }
+    std::shared_ptr<void> pin(Image& image) override { return gpu::OptixRenderer::pin(image); }
 
   private:
     gpu::OptixRenderer m_renderer;

@@ -45,6 +45,13 @@ class SceneRenderer {
                              AovImages* aovs = nullptr) {
         out = render(resolved, progress, nullptr, aovs);
     }
+    // Makes render_into's writes into `image` faster while the handle lives (OptiX: page-locked memory); nullptr
+    // where that means nothing (the CPU) or cannot be had. `image` must keep its storage while the handle lives:
+    // call it once render_into has sized the image.
+    virtual std::shared_ptr<void> pin(Image& image) {
+        (void)image;
+        return nullptr;
+    }
 
   private:
     Image m_frame;

@@ -62,6 +62,17 @@ struct OptixRenderer::PinnedImage {
     PinnedImage& operator=(const PinnedImage&) = delete;
 };
 
+std::shared_ptr<void> OptixRenderer::pin(Image& image) {
+    float* data = image.pixels.data();
+    if (image.pixels.empty() ||
+        cudaHostRegister(data, image.pixels.size() * sizeof(float), cudaHostRegisterDefault) != cudaSuccess) {
+        cudaGetLastError();  // clear it: the image works without
+        spdlog::debug("render: an image could not be page-locked; its downloads are slower");
+        return nullptr;
+    }
+    return std::shared_ptr<void>(data, [](void* p) { cudaHostUnregister(p); });
+}
+
 // Grids through hardware-filtered textures (2x faster on cornell_volume, the same image within noise;
 // docs/benchmarks.md) unless NERFPT_OPTIX_GRID_TEXTURES=0, a benchmark knob: the exact eight-voxel lookup.
 static bool use_grid_textures() {

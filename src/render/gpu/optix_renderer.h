@@ -31,6 +31,10 @@ class OptixRenderer {
     // render() (no denoiser) into `out`, reusing its storage when it has the frame's size and channels.
     void render_into(const render::RenderOptions& options, Image& out, const render::ProgressFn& progress,
                      render::AovImages* aovs = nullptr);
+    // Page-locks `image`'s storage (cudaHostRegister) until the returned handle goes, so that render_into's
+    // download into it runs at the bus's speed; nullptr when the driver refuses (downloads work without). The
+    // image must keep its storage (no resize, no free) while the handle lives.
+    static std::shared_ptr<void> pin(Image& image);
     // After scene::pose_scene moved the scene this renderer was built from: the moved meshes' vertices are
     // uploaded and the acceleration structure rebuilt (only when a mesh moved), the lights, the volumes'
     // placements and the camera updated. Grids, models, textures and the pipeline are kept.
