@@ -68,9 +68,11 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "Steps between checkpoints (default: the config's, 500)")
         ->check(CLI::Range(1, 100000000));
     cmd->add_option("--surface-smoothness", args.surface_smoothness,
-                    "Weight of a loss that keeps the trained surface smooth where the images do not say "
-                    "otherwise (the config's loss.surface_smoothness; default 0, off): better normals for "
-                    "--relightable. Not with --resume: a model keeps its config")
+                    fmt::format("Weight of a loss that keeps the trained surface smooth where the images do "
+                                "not say otherwise (the config's loss.surface_smoothness): better normals for "
+                                "relighting. Default: {} with --relightable (unless --config gives one), else "
+                                "the config's (0, off). Not with --resume: a model keeps its config",
+                                k_relightable_surface_smoothness))
         ->check(CLI::Range(0.0, 1e6));
     add_backend_option(cmd, args.backend);
     cmd->add_flag(
@@ -104,10 +106,10 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "expected-depth stencil around the pixel, the default) or 'density' (-grad log sigma)")
         ->check(CLI::IsMember({"depth", "density"}));
     cmd->add_option("--relight-specular", args.relight_specular,
-                    "How the fit shades: 'sampled' (the default: the light directions of each point, which miss "
-                    "narrow specular lobes and leave some of their light in the albedo) or 'prefiltered' (the "
-                    "environment prefiltered with each lobe's width: +0.8 dB of albedo on our dev set, but the "
-                    "roughness comes out low and relit highlights sparkle; see docs/relighting.md)")
+                    "How the fit shades: 'prefiltered' (the default: the environment prefiltered with each "
+                    "lobe's width, the split sum of image-based lighting) or 'sampled' (the light directions of "
+                    "each point, which miss narrow specular lobes and leave some of their light in the albedo; "
+                    "see docs/relighting.md)")
         ->check(CLI::IsMember({"prefiltered", "sampled"}));
     cmd->add_option("--relight-diffuse", args.relight_diffuse,
                     "How the fit estimates the diffuse light: 'sampled' (the sum over each point's light "
@@ -236,7 +238,10 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         const nerf::NerfConfig base =
             backend == nerf::Backend::cuda ? nerf::cuda_default_config() : nerf::cpu_default_config();
         nerf::NerfConfig config = args.config.empty() ? base : nerf::load_config(args.config, base);
-        if (args.surface_smoothness >= 0.0f) config.loss.surface_smoothness = args.surface_smoothness;
+        if (args.surface_smoothness >= 0.0f)
+            config.loss.surface_smoothness = args.surface_smoothness;
+        else if (args.relightable && args.config.empty())
+            config.loss.surface_smoothness = k_relightable_surface_smoothness;
         model =
             nerf::create_model(config, data.aabb_scale, nerf::ngp_world_to_model(data.scale, data.offset));
     }

@@ -13,6 +13,10 @@
 
 namespace npt::cli {
 
+// The surface-smoothness loss's weight when --relightable trains a new model (docs/relighting.md: normals 9.5 ->
+// 4.8 degrees on dev with the prefiltered fit and Burley's diffuse, relit views +0.7 dB; docs/benchmarks.md).
+constexpr float k_relightable_surface_smoothness = 0.3f;
+
 struct TrainArgs {
     std::string data;
     std::string output;
@@ -24,12 +28,14 @@ struct TrainArgs {
     int threads = 0;
     std::string backend;  // "", cpu or cuda (backend_option.h)
     int checkpoint_every = 0;  // 0: the config's
-    float surface_smoothness = -1.0f;  // < 0: the config's loss.surface_smoothness
+    // < 0: k_relightable_surface_smoothness with --relightable and no --config, else the config's
+    // loss.surface_smoothness.
+    float surface_smoothness = -1.0f;
     bool resume = false;
     bool relightable = false;        // run the relight stage after training (relight_stage.h)
     RelightStageOptions relight;  // --relight-*; steps, points and batch of 0 are the stage's defaults
     std::string relight_normals = "depth";  // depth | density (nerf::NormalEstimator)
-    std::string relight_specular = "sampled";  // sampled | prefiltered (nerf::SpecularEstimate)
+    std::string relight_specular = "prefiltered";  // prefiltered | sampled (nerf::SpecularEstimate)
     std::string relight_diffuse;                // sampled | ratio (nerf::DiffuseEstimate); "": as the specular
     std::string relight_diffuse_lobe = "burley";  // burley | layered (nerf::IntrinsicDiffuse)
     bool force = false;

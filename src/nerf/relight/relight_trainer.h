@@ -52,8 +52,8 @@ struct RelightTrainSettings {
     // mean, so a highlight that the fit's shading cannot explain, seen from a few views, moves it less.
     float huber_delta = 0.0f;
     bool learn_exposure = true;
-    SpecularEstimate specular = SpecularEstimate::sampled;  // measured on dev: docs/benchmarks.md
-    DiffuseEstimate diffuse = DiffuseEstimate::sampled;
+    SpecularEstimate specular = SpecularEstimate::prefiltered;  // measured on dev: docs/benchmarks.md
+    DiffuseEstimate diffuse = DiffuseEstimate::ratio;
     uint64_t seed = 7;
 };
 
