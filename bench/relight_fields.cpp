@@ -4,7 +4,10 @@
 // `normal_N.exr` (and `roughness_N.exr`, grey) for
 // ../shared/data/relight/score.py (run it with --normals-zup). Prints a table of time and coverage.
 //   relight_fields MODEL.npt DATA/transforms_test.json OUT_DIR [--spp 8] [--backend cpu|cuda]
-//                  [--normals predicted|density|depth] [--normal-step 0.004] [--normal-pixels 2]
+//                  [--normals predicted|density|depth] [--normal-step 0.004] [--normal-pixels 2] [--at events|mean]
+// --at mean queries the albedo and roughness once per pixel, at the mean of its rays' event positions (about the
+// expected termination point), instead of averaging them over the events: how much the events' spread in depth
+// about the surface blurs the albedo (docs/benchmarks.md, issue 24).
 // --normals measures an estimator of surface_normals.h instead of the fitted normal field (the model then need
 // not be relightable; the albedo is written only for relightable models): what the relight stage's targets are
 // worth against the ground truth.
@@ -31,11 +34,12 @@ using namespace npt::nerf;
 int main(int argc, char** argv) try {
     if (argc < 4) {
         fmt::print(stderr, "usage: relight_fields MODEL.npt TRANSFORMS.json OUT_DIR [--spp N] [--backend cpu|cuda] "
-                           "[--normals predicted|density|depth] [--normal-step S] [--normal-pixels P]\n");
+                           "[--normals predicted|density|depth] [--normal-step S] [--normal-pixels P] "
+                           "[--at events|mean]\n");
         return 2;
     }
     int spp = 8;
-    std::string backend_name, normals_mode = "predicted";
+    std::string backend_name, normals_mode = "predicted", at_mode = "events";
     float normal_step = 0.004f, normal_pixels = 2.0f;
     for (int i = 4; i + 1 < argc; i += 2) {
         if (std::strcmp(argv[i], "--spp") == 0) spp = std::max(1, std::atoi(argv[i + 1]));
@@ -43,7 +47,9 @@ int main(int argc, char** argv) try {
         if (std::strcmp(argv[i], "--normals") == 0) normals_mode = argv[i + 1];
         if (std::strcmp(argv[i], "--normal-step") == 0) normal_step = float(std::atof(argv[i + 1]));
         if (std::strcmp(argv[i], "--normal-pixels") == 0) normal_pixels = float(std::atof(argv[i + 1]));
+        if (std::strcmp(argv[i], "--at") == 0) at_mode = argv[i + 1];
     }
+    if (at_mode != "events" && at_mode != "mean") throw Error("--at: '" + at_mode + "' is not events or mean");
     if (normals_mode != "predicted" && normals_mode != "density" && normals_mode != "depth")
         throw Error("--normals: '" + normals_mode + "' is not predicted, density or depth");
     const NerfModel model = load_model(argv[1]);
@@ -102,13 +108,25 @@ int main(int argc, char** argv) try {
                 Vec3 n(0.0f);
                 float rough = 0.0f;
                 int hits = 0;
+                Vec3 mean_position(0.0f);
+                int events = 0;
+                for (int s = 0; s < spp; ++s) {
+                    const WaveRay& r = rays[(size_t(y) * W + x) * spp + s];
+                    if (r.has_event) {
+                        mean_position += r.event_position;
+                        ++events;
+                    }
+                }
+                if (events) mean_position = mean_position * (1.0f / float(events));
+                const IntrinsicSample at_mean =
+                    fitted && events && at_mode == "mean" ? intrinsic.query(mean_position) : IntrinsicSample{};
                 for (int s = 0; s < spp; ++s) {
                     const size_t i = (size_t(y) * W + x) * spp + s;
                     const WaveRay& r = rays[i];
                     if (!r.has_event) continue;
                     Vec3 nm;
                     if (fitted) {
-                        const IntrinsicSample is = intrinsic.query(r.event_position);
+                        const IntrinsicSample is = at_mode == "mean" ? at_mean : intrinsic.query(r.event_position);
                         a += is.albedo;
                         rough += is.roughness;
                         nm = is.normal;
