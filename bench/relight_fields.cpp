@@ -110,7 +110,7 @@ int main(int argc, char** argv) try {
                 int hits = 0;
                 Vec3 mean_position(0.0f);
                 int events = 0;
-                for (int s = 0; s < spp; ++s) {
+                for (int s = 0; at_mode == "mean" && s < spp; ++s) {
                     const WaveRay& r = rays[(size_t(y) * W + x) * spp + s];
                     if (r.has_event) {
                         mean_position += r.event_position;

@@ -398,12 +398,12 @@ TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
 struct ExactShading {
     static constexpr int n_mu = 24;
     float diffuse[n_mu], specular[n_mu];
-    explicit ExactShading(float roughness) {
+    ExactShading(float roughness, IntrinsicDiffuse lobe) {
         IntrinsicSample one, zero;
         one.roughness = zero.roughness = roughness;
         one.albedo = Rgb(1.0f);
         zero.albedo = Rgb(0.0f);
-        one.diffuse = zero.diffuse = IntrinsicConfig{}.diffuse;  // the fit's lobe (recovery_settings)
+        one.diffuse = zero.diffuse = lobe;
         const materials::Bsdf b1 = intrinsic_bsdf(one), b0 = intrinsic_bsdf(zero);
         constexpr int n_theta = 128, n_phi = 512;
         for (int m = 0; m < n_mu; ++m) {
@@ -443,15 +443,17 @@ struct ExactShading {
 struct GlossyFit {
     double albedo_error = 0, roughness = 0;
 };
-GlossyFit fit_glossy_sphere(SpecularEstimate estimate, float roughness) {
-    const ExactShading exact(roughness);
+GlossyFit fit_glossy_sphere(SpecularEstimate estimate, float roughness, IntrinsicDiffuse lobe) {
+    const ExactShading exact(roughness, lobe);
     RelightSamples s = synthetic_samples(2048, 8, false);
     for (size_t i = 0; i < s.size(); ++i) {
         float d, e;
         exact.at(dot(s.wo[i], s.normal[i]), &d, &e);
         s.target[i] = true_albedo(s.position[i]) * d + Rgb(e);
     }
-    RelightTrainer tr(small_model(), 2, s, recovery_settings(estimate));
+    RelightTrainSettings ts = recovery_settings(estimate);
+    ts.intrinsic.diffuse = lobe;  // the targets' lobe
+    RelightTrainer tr(small_model(), 2, s, ts);
     for (int i = 0; i < 1500; ++i) tr.step();
     NerfModel fitted = small_model();
     fitted.relight = tr.fields(1.0);
@@ -469,20 +471,23 @@ GlossyFit fit_glossy_sphere(SpecularEstimate estimate, float roughness) {
 // reflection into the albedo (an offset that no per-channel scale removes); the prefiltered one does not. (Under
 // a uniform sky the roughness barely changes the shading, so it is printed, not checked.)
 TEST(RelightTrainer, PrefilteredSpecularRecoversAGlossyAlbedo) {
-    for (const float roughness : {0.3f, 0.6f}) {
-        const GlossyFit pre = fit_glossy_sphere(SpecularEstimate::prefiltered, roughness);
-        const GlossyFit sampled = fit_glossy_sphere(SpecularEstimate::sampled, roughness);
-        std::printf("roughness %.1f: relative albedo error: prefiltered %.4f, sampled %.4f; mean roughness %.3f / "
-                    "%.3f\n",
-                    roughness, pre.albedo_error, sampled.albedo_error, pre.roughness, sampled.roughness);
-        // The bound is not derived. With the layered diffuse 0.053 (roughness 0.3) and 0.061 (0.6) were
-        // measured, against 0.49 and 0.32 sampled; with Burley's (the default lobe) 0.048 and 0.093, against
-        // 0.24 and 0.23: under a uniform sky its roughness-dependent grazing brightness trades against the
-        // albedo point by point. 0.12 is the fit's own bound on exact targets (0.05, RecoversAKnownAlbedo...)
-        // with room for the tables and that trade. The second check is the one that says what the estimator is for.
-        EXPECT_LT(pre.albedo_error, 0.12) << "roughness " << roughness;
-        EXPECT_LT(pre.albedo_error, 0.5 * sampled.albedo_error) << "roughness " << roughness;
-    }
+    for (const IntrinsicDiffuse lobe : {IntrinsicDiffuse::layered, IntrinsicDiffuse::burley})
+        for (const float roughness : {0.3f, 0.6f}) {
+            const GlossyFit pre = fit_glossy_sphere(SpecularEstimate::prefiltered, roughness, lobe);
+            const GlossyFit sampled = fit_glossy_sphere(SpecularEstimate::sampled, roughness, lobe);
+            const bool burley = lobe == IntrinsicDiffuse::burley;
+            std::printf("%s, roughness %.1f: relative albedo error: prefiltered %.4f, sampled %.4f; mean roughness "
+                        "%.3f / %.3f\n",
+                        burley ? "Burley" : "layered", roughness, pre.albedo_error, sampled.albedo_error,
+                        pre.roughness, sampled.roughness);
+            // What the estimator is for: well under half the sampled estimate's error, with either lobe.
+            EXPECT_LT(pre.albedo_error, 0.5 * sampled.albedo_error) << "roughness " << roughness;
+            // Regression bounds, not derived: the layered lobe's 0.08 predates Burley's (0.053 and 0.061 measured,
+            // the fit's own 0.05 on exact targets with room for the tables). Burley's was set after measuring
+            // 0.048 and 0.093 (against 0.24 and 0.23 sampled): under a uniform sky its roughness-dependent
+            // grazing brightness trades against the albedo point by point, so its bound is looser.
+            EXPECT_LT(pre.albedo_error, burley ? 0.12 : 0.08) << "roughness " << roughness;
+        }
 }
 
 }  // namespace

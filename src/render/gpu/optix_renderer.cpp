@@ -41,27 +41,6 @@ struct StreamOwner {
 };
 }  // namespace
 
-// render_frame's image, page-locked so that the download runs at the bus's speed (a 1080p frame is 25 MB: from
-// pageable memory, staged by the driver, it took longer than the NeRF pass's tail). Where the system will not
-// lock the pages the image stays pageable: slower, not wrong.
-struct OptixRenderer::PinnedImage {
-    Image image;
-    bool pinned = false;
-    PinnedImage(int w, int h, int channels) : image(w, h, channels) {
-        pinned = cudaHostRegister(image.pixels.data(), image.pixels.size() * sizeof(float), cudaHostRegisterDefault) ==
-                 cudaSuccess;
-        if (!pinned) {
-            cudaGetLastError();  // clear it: the frame works without
-            spdlog::debug("render: the frame buffer could not be page-locked; downloads are slower");
-        }
-    }
-    ~PinnedImage() {
-        if (pinned) cudaHostUnregister(image.pixels.data());
-    }
-    PinnedImage(const PinnedImage&) = delete;
-    PinnedImage& operator=(const PinnedImage&) = delete;
-};
-
 std::shared_ptr<void> OptixRenderer::pin(Image& image) {
     float* data = image.pixels.data();
     if (image.pixels.empty() ||
@@ -72,6 +51,17 @@ std::shared_ptr<void> OptixRenderer::pin(Image& image) {
     }
     return std::shared_ptr<void>(data, [](void* p) { cudaHostUnregister(p); });
 }
+
+// render_frame's image, page-locked so that the download runs at the bus's speed (a 1080p frame is 25 MB: from
+// pageable memory, staged by the driver, it took longer than the NeRF pass's tail). Where the system will not
+// lock the pages the image stays pageable: slower, not wrong.
+struct OptixRenderer::PinnedImage {
+    Image image;
+    std::shared_ptr<void> pinned;  // declared after the image: unregistered before its storage is freed
+    PinnedImage(int w, int h, int channels) : image(w, h, channels), pinned(pin(image)) {}
+    PinnedImage(const PinnedImage&) = delete;
+    PinnedImage& operator=(const PinnedImage&) = delete;
+};
 
 // Grids through hardware-filtered textures (2x faster on cornell_volume, the same image within noise;
 // docs/benchmarks.md) unless NERFPT_OPTIX_GRID_TEXTURES=0, a benchmark knob: the exact eight-voxel lookup.
