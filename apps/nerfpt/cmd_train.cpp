@@ -154,6 +154,13 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                        k_relight_pixels_gpu, k_relight_pixels_cpu))
         ->check(CLI::Range(0, 1 << 24));
     cmd->add_option(
+           "--relight-pool", args.relight.pooled_neighbours,
+           fmt::format("Nearby surface points whose light directions each point also shades with (their "
+                       "shadowing and indirect light, no rays of its own): a less noisy shading estimate, "
+                       "so a cleaner albedo, at more fitting time per step (default: {})",
+                       args.relight.pooled_neighbours))
+        ->check(CLI::Range(0, 64));
+    cmd->add_option(
            "--relight-table", args.relight.table_log2,
            fmt::format("log2 of the hash entries per level of the albedo/roughness/normal grid: more "
                        "resolves finer texture, at 12 x 2 x 4 bytes x 2^N of model size (default: {})",

@@ -17,15 +17,20 @@ class InterruptGuard;
 
 // The defaults of points, directions and batch per backend. Measured on dev (docs/benchmarks.md, issue 24):
 // on the GPU, 16x more points at a quarter of the directions bought 2 dB of albedo, and 4x more again at half
-// the directions (1 M x 8) another 0.9 dB and 1 degree of normals for 11 s more; the CPU's keep the gather to
-// minutes on 2 cores.
+// the directions (1 M x 8) another 0.9 dB and 1 degree of normals for 11 s more; later, with borrowing pixels
+// and the prefiltered fit, 16 directions instead of 8 bought 1.0 dB of albedo for 3-5 s of gather (32: 1.6 dB
+// for 18 s). The CPU's keep the gather to minutes on 2 cores.
 constexpr int k_relight_points_gpu = 1048576, k_relight_points_cpu = 32768;
-constexpr int k_relight_directions_gpu = 8, k_relight_directions_cpu = 16;
+constexpr int k_relight_directions_gpu = 16, k_relight_directions_cpu = 16;
 constexpr int k_relight_batch_gpu = 4096, k_relight_batch_cpu = 1024;
 // Borrowing pixels (relight_samples.h): on the CPU 262 144 bought 2.6 dB of albedo and 2 degrees of normals
 // for a third more gather time; on the GPU 2.2 M bought 0.2 dB of albedo and 0.5 degrees of normals over 1 M lit
 // points, for 13 s.
 constexpr int k_relight_pixels_gpu = 2097152, k_relight_pixels_cpu = 262144;
+// Pooled neighbours (RelightSampleSettings::pooled_neighbours): on the CPU 8 bought 0.3 dB of albedo for 6 s
+// of fitting (4: 0.3 dB); more directions per point, which it stands in for without rays, bought 1 dB per
+// doubling on the GPU.
+constexpr int k_relight_pooled_neighbours = 8;
 
 struct RelightStageOptions {
     uint64_t steps = 1500;  // optimiser steps of the stage
@@ -41,6 +46,7 @@ struct RelightStageOptions {
     float roughness_prior = nerf::RelightTrainSettings{}.roughness_prior;
     float huber_delta = nerf::RelightTrainSettings{}.huber_delta;
     int borrowing_pixels = -1;  // -1: k_relight_pixels_* of the backend
+    int pooled_neighbours = k_relight_pooled_neighbours;
     int table_log2 =
         nerf::IntrinsicConfig{}.grid.log2_table_size;  // hash entries per level of the intrinsic grid
     float finest_resolution =

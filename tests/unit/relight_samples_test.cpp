@@ -97,6 +97,60 @@ TEST(RelightSamples, BorrowingPixelsTakeTheLightOfANearbyFacingPoint) {
     EXPECT_THROW(gather_relight_samples(model, train, *query, ss), Error);
 }
 
+TEST(RelightSamples, PooledNeighboursAreNearbyLitPointsWithAgreeingNormals) {
+    const Dataset train = test::make_sphere_scene({.views = 20, .size = 32, .view_seed = 1});
+    const NerfModel model = trained_spheres(train);
+    std::unique_ptr<FieldQuery> query = make_cpu_field_query(model);
+    RelightSampleSettings ss;
+    ss.points = 512;
+    ss.directions = 4;
+    ss.event_draws = 1;
+    ss.min_alpha = 0.5f;
+    ss.borrowing_pixels = 64;
+    ss.borrow_radius = 0.08f;
+    ss.pooled_neighbours = 3;
+    const RelightSamples s = gather_relight_samples(model, train, *query, ss);
+    ASSERT_GT(s.lit, 256u);
+    ASSERT_EQ(s.neighbours, 3);
+    ASSERT_EQ(s.neighbour.size(), s.lit * 3);
+    size_t pooled = 0;
+    std::vector<uint32_t> dirs;
+    for (size_t i = 0; i < s.lit; ++i) {
+        float last = 0.0f;
+        bool ended = false;
+        for (int m = 0; m < 3; ++m) {
+            const uint32_t q = s.neighbour[i * 3 + m];
+            if (q == RelightSamples::k_no_neighbour) {
+                ended = true;
+                continue;
+            }
+            ASSERT_FALSE(ended) << "a neighbour after the list's end";
+            ASSERT_LT(q, s.lit);
+            ASSERT_NE(q, i);
+            const float d = length(s.position[q] - s.position[i]);
+            EXPECT_LT(d, 0.08f);
+            EXPECT_GE(d, last);  // nearest first
+            last = d;
+            EXPECT_GT(dot(s.normal[q], s.normal[i]), 0.9f);
+            ++pooled;
+        }
+        // The point's own directions first, then each neighbour's.
+        s.light_directions(uint32_t(i), dirs);
+        ASSERT_GE(dirs.size(), 4u);
+        for (uint32_t k = 0; k < 4; ++k) EXPECT_EQ(dirs[k], uint32_t(i) * 4 + k);
+        if (s.neighbour[i * 3] != RelightSamples::k_no_neighbour) EXPECT_EQ(dirs[4], s.neighbour[i * 3] * 4);
+    }
+    EXPECT_GT(pooled, s.lit * 2);  // 512 points on two spheres: most have 3 neighbours within 0.08
+    // Borrowing pixels shade with their donor's pooled directions.
+    ASSERT_GT(s.size(), s.lit);
+    std::vector<uint32_t> donor_dirs;
+    s.light_directions(s.light_of(s.lit), dirs);
+    s.light_directions(s.donor[0], donor_dirs);
+    EXPECT_EQ(dirs, donor_dirs);
+    ss.pooled_neighbours = -1;
+    EXPECT_THROW(gather_relight_samples(model, train, *query, ss), Error);
+}
+
 TEST(RelightSamples, ZeroEventDrawsIsAnError) {
     const Dataset train = test::make_sphere_scene({.views = 4, .size = 16, .view_seed = 1});
     const NerfModel model =

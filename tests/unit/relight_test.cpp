@@ -18,6 +18,7 @@
 #include "nerf/model_file.h"
 #include "nerf/relight/relight_section.h"
 #include "core/srgb.h"
+#include "nerf/relight/relight_env.h"
 #include "nerf/relight/relight_trainer.h"
 #include "nerf/relight/wavefront_march.h"
 #include "test_support.h"
@@ -259,9 +260,16 @@ RelightSamples synthetic_samples(int points, int K, bool shadows) {
 // the specular split sum.
 void expect_gradient_matches_finite_differences(SpecularEstimate estimate, DiffuseEstimate diffuse,
                                                 float huber_delta = 0.0f,
-                                                IntrinsicDiffuse lobe = IntrinsicDiffuse::burley) {
+                                                IntrinsicDiffuse lobe = IntrinsicDiffuse::burley,
+                                                int pooled = 0) {
     const NerfModel m = small_model();
-    const RelightSamples s = synthetic_samples(64, 8, true);
+    RelightSamples s = synthetic_samples(64, 8, true);
+    // Pooled neighbours (any lit points will do for the gradient; some lists end early), whose directions
+    // partly fall below a point's horizon.
+    s.neighbours = pooled;
+    for (uint32_t i = 0; i < 64 && pooled > 0; ++i)
+        for (int k = 0; k < pooled; ++k)
+            s.neighbour.push_back(i % 5 == 0 && k > 0 ? RelightSamples::k_no_neighbour : (i + 1 + uint32_t(k)) % 64);
     RelightTrainSettings ts;
     ts.intrinsic = small_intrinsic();
     ts.intrinsic.diffuse = lobe;
@@ -321,6 +329,41 @@ TEST(RelightTrainer, LayeredDiffuseGradientMatchesFiniteDifferences) {
                                                IntrinsicDiffuse::layered);
     expect_gradient_matches_finite_differences(SpecularEstimate::sampled, DiffuseEstimate::sampled, 0.0f,
                                                IntrinsicDiffuse::layered);
+}
+
+// The fit keeps each light direction's environment lookup packed in 8 bytes: the same texels and weights as
+// env_taps to the 16-bit fractions' rounding, across the seam at u = 0 and at both poles.
+TEST(RelightEnv, PackedTapsMatchTheLookup) {
+    Pcg32 rng(3, 4);
+    std::vector<Vec3> dirs = {Vec3(0, 0, 1), Vec3(0, 0, -1), Vec3(-1, 0, 0), Vec3(-1, 1e-7f, 0), Vec3(-1, -1e-7f, 0),
+                              normalize(Vec3(1e-4f, 0, 1))};
+    for (int i = 0; i < 20000; ++i) {
+        const float z = 1.0f - 2.0f * rng.next_float(), phi = 6.2831853f * rng.next_float();
+        const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+        dirs.push_back(Vec3(r * std::cos(phi), r * std::sin(phi), z));
+    }
+    for (const auto& [w, h] : {std::pair{32, 16}, std::pair{8, 4}, std::pair{2, 1}, std::pair{4096, 4096}})
+        for (const Vec3 d : dirs) {
+            const EnvTaps a = env_taps(w, h, d), b = unpack_env_taps(w, h, pack_env_taps(w, h, d));
+            // Equal texels, or a weight of (almost) zero where a fraction rounded across a texel's edge.
+            Rgb sum_b(0.0f);
+            for (int k = 0; k < 4; ++k) {
+                ASSERT_GE(b.index[k], 0);
+                ASSERT_LT(b.index[k], w * h);
+                if (a.index[k] != b.index[k]) ASSERT_LT(std::max(a.weight[k], b.weight[k]), 1e-4f) << w << "x" << h;
+                ASSERT_NEAR(a.weight[k], b.weight[k], 2e-5f) << w << "x" << h;
+                sum_b += Rgb(b.weight[k]);
+            }
+            ASSERT_NEAR(sum_b.x, 1.0f, 1e-5f);
+        }
+}
+
+// Each point also shaded with its pooled neighbours' directions (RelightSampleSettings::pooled_neighbours).
+TEST(RelightTrainer, PooledDirectionsGradientMatchesFiniteDifferences) {
+    expect_gradient_matches_finite_differences(SpecularEstimate::prefiltered, DiffuseEstimate::ratio, 0.0f,
+                                               IntrinsicDiffuse::burley, 3);
+    expect_gradient_matches_finite_differences(SpecularEstimate::sampled, DiffuseEstimate::sampled, 0.0f,
+                                               IntrinsicDiffuse::burley, 2);
 }
 
 // A threshold well inside the residuals this fit has after 20 steps, so that both branches are taken.

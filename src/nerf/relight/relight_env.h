@@ -4,6 +4,7 @@
 #pragma once
 
 #include <math.h>
+#include <stdint.h>
 
 #include "core/platform.h"
 #include "core/vec.h"
@@ -29,6 +30,46 @@ NPT_HD NPT_INLINE EnvTaps env_taps(int width, int height, Vec3 d) {
     x1 = ((x1 % width) + width) % width;
     y0 = y0 < 0 ? 0 : (y0 >= height ? height - 1 : y0);
     y1 = y1 < 0 ? 0 : (y1 >= height ? height - 1 : y1);
+    EnvTaps t;
+    t.index[0] = y0 * width + x0;
+    t.index[1] = y0 * width + x1;
+    t.index[2] = y1 * width + x0;
+    t.index[3] = y1 * width + x1;
+    t.weight[0] = (1.0f - ax) * (1.0f - ay);
+    t.weight[1] = ax * (1.0f - ay);
+    t.weight[2] = (1.0f - ax) * ay;
+    t.weight[3] = ax * ay;
+    return t;
+}
+
+// env_taps' lookup kept in 8 bytes (the relight fit keeps one per light direction of millions of points): the
+// first texel's column and row (+ 1: the row above the first is -1 near the pole) and the bilinear fractions
+// in 16 bits. For maps of at most 65535 x 65534 texels.
+struct PackedEnvTaps {
+    uint16_t x0, y0_plus_1, ax, ay;
+};
+
+NPT_HD NPT_INLINE PackedEnvTaps pack_env_taps(int width, int height, Vec3 d) {
+    constexpr float k_pi = 3.14159265358979f;
+    const float u = atan2f(d.y, d.x) * (0.5f / k_pi) + 0.5f;
+    const float v = acosf(fminf(1.0f, fmaxf(-1.0f, d.z))) * (1.0f / k_pi);
+    const float x = u * float(width) - 0.5f, y = v * float(height) - 0.5f;
+    const float fx = floorf(x), fy = floorf(y);
+    const int x0 = ((int(fx) % width) + width) % width;
+    const int y0 = int(fy) < -1 ? -1 : (int(fy) >= height ? height - 1 : int(fy));
+    PackedEnvTaps p;
+    p.x0 = uint16_t(x0);
+    p.y0_plus_1 = uint16_t(y0 + 1);
+    p.ax = uint16_t(fminf(65535.0f, (x - fx) * 65535.0f + 0.5f));
+    p.ay = uint16_t(fminf(65535.0f, (y - fy) * 65535.0f + 0.5f));
+    return p;
+}
+
+NPT_HD NPT_INLINE EnvTaps unpack_env_taps(int width, int height, PackedEnvTaps p) {
+    const float ax = float(p.ax) * (1.0f / 65535.0f), ay = float(p.ay) * (1.0f / 65535.0f);
+    const int x0 = p.x0, x1 = x0 + 1 == width ? 0 : x0 + 1;
+    const int y = int(p.y0_plus_1) - 1;
+    const int y0 = y < 0 ? 0 : y, y1 = y + 1 >= height ? height - 1 : y + 1;
     EnvTaps t;
     t.index[0] = y0 * width + x0;
     t.index[1] = y0 * width + x1;

@@ -41,6 +41,11 @@ struct RelightSampleSettings {
     // albedo supervision at the cost of one camera ray per pixel instead of `directions` light rays.
     int borrowing_pixels = 0;
     float borrow_radius = 0.02f;
+    // Lit points whose light directions each lit point shades with besides its own: the nearest ones within
+    // borrow_radius whose normals agree (within ~25 degrees). Shadowing and indirect light vary slowly over a
+    // surface, so a point's few directions are a noisy estimate of them that its neighbours' directions
+    // average, at no marching cost: the fit's per-point shading target is that much less noisy.
+    int pooled_neighbours = 0;
     uint64_t seed = 1;
 };
 
@@ -66,10 +71,27 @@ struct RelightSamples {
     // indirect hold the lit points' only.
     size_t lit = 0;
     std::vector<uint32_t> donor;
+    // Per lit point, the lit points whose directions it pools (settings.pooled_neighbours):
+    // [point * neighbours + m], k_no_neighbour where it found fewer.
+    static constexpr uint32_t k_no_neighbour = 0xffffffffu;
+    int neighbours = 0;
+    std::vector<uint32_t> neighbour;
 
     size_t size() const { return position.size(); }
     // The point whose normal and light sample s uses.
     uint32_t light_of(size_t s) const { return s < lit || donor.empty() ? uint32_t(s) : donor[s - lit]; }
+    // The light directions point L is shaded with ([point * directions + k] indices): its own, then its
+    // pooled neighbours'.
+    void light_directions(uint32_t L, std::vector<uint32_t>& out) const {
+        out.clear();
+        const uint32_t K = uint32_t(directions);
+        for (uint32_t k = 0; k < K; ++k) out.push_back(L * K + k);
+        for (int m = 0; m < neighbours && !neighbour.empty(); ++m) {
+            const uint32_t q = neighbour[size_t(L) * size_t(neighbours) + size_t(m)];
+            if (q == k_no_neighbour) break;
+            for (uint32_t k = 0; k < K; ++k) out.push_back(q * K + k);
+        }
+    }
     // Draw m (taken modulo draws) of point s; `position` when the samples carry no draws.
     Vec3 draw_position(size_t s, uint32_t m) const {
         return draws > 1 && draw.size() == position.size() * size_t(draws)

@@ -1,5 +1,6 @@
 #include "nerf/relight/relight_trainer.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -57,15 +58,15 @@ struct LobeLight {
     Rgb indirect{0.0f};
 };
 
-inline LobeLight lobe_light(const RelightSamples& S, uint32_t point, const float* wk, Vec3 wr, float width) {
-    const int K = S.directions;
+inline LobeLight lobe_light(const RelightSamples& S, const std::vector<uint32_t>& dirs, const float* wk, Vec3 wr,
+                            float width) {
     const float s = std::max(width, 0.6f), inv_s2 = 1.0f / (s * s);
     double total = 0, v = 0, plain = 0;
     Rgb ind(0.0f), plain_ind(0.0f);
     int used = 0;
-    for (int k = 0; k < K; ++k) {
+    for (size_t k = 0; k < dirs.size(); ++k) {
         if (wk[k] == 0.0f) continue;  // below the horizon of the shading frame
-        const size_t sk = size_t(point) * size_t(K) + size_t(k);
+        const size_t sk = dirs[k];
         const float g = std::exp((dot(S.dir[sk], wr) - 1.0f) * inv_s2);
         total += g;
         v += g * S.visibility[sk];
@@ -108,8 +109,9 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
     if (samples.size() == 0) throw Error("relight: no surface points to train on");
     if (!(settings.huber_delta >= 0.0f) || !std::isfinite(settings.huber_delta))
         throw Error("relight: the Huber threshold must be finite and >= 0");
-    if (settings.env_width < 2 || settings.env_height < 1 || settings.batch < 1)
-        throw Error("relight: the environment needs at least 2x1 texels and the batch one point");
+    if (settings.env_width < 2 || settings.env_height < 1 || settings.env_width > 4096 ||
+        settings.env_height > 4096 || settings.batch < 1)
+        throw Error("relight: the environment needs 2x1 to 4096x4096 texels and the batch one point");
     for (uint32_t img : samples.image)
         if (img >= image_count) throw Error("relight: a point refers to image " + std::to_string(img));
     if (settings.specular == SpecularEstimate::prefiltered || settings.diffuse == DiffuseEstimate::ratio) {
@@ -120,6 +122,11 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
         m_diffuse_lobe = materials::make_principled(intrinsic_bsdf(white));
         m_prefilter = std::make_shared<const EnvPrefilter>(settings.env_width, settings.env_height);
     }
+    m_dir_taps.resize(samples.dir.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.dir.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i)
+            m_dir_taps[i] = pack_env_taps(settings.env_width, settings.env_height, samples.dir[i]);
+    });
     m_env_offset = m_layout.total;
     m_exposure_offset = m_env_offset + size_t(settings.env_width) * settings.env_height * 3;
     m_total = m_exposure_offset + image_count;
@@ -156,7 +163,6 @@ RelightStepStats RelightTrainer::gradient(std::vector<float>& grads) {
 
 RelightStepStats RelightTrainer::compute_gradient() {
     const RelightSamples& S = m_samples;
-    const int K = S.directions;
     const int W = m_settings.env_width, H = m_settings.env_height;
     const size_t n_env = size_t(W) * H;
     const uint64_t step = m_adam.state().step;
@@ -194,7 +200,6 @@ RelightStepStats RelightTrainer::compute_gradient() {
     std::vector<Chunk> chunks(n_chunks);
     const HashLevels levels = hash_levels(m_layout.grid);
     const float inv_batch = 1.0f / float(batch);
-    const float dir_weight = k_two_pi / float(K);
     const float huber = m_settings.huber_delta;
     const IntrinsicDiffuse diffuse_lobe = m_settings.intrinsic.diffuse;
     const bool burley = diffuse_lobe == IntrinsicDiffuse::burley;  // the diffuse lobe depends on the roughness
@@ -220,11 +225,18 @@ RelightStepStats RelightTrainer::compute_gradient() {
             hash_encode(m_layout.grid, levels, params + m_layout.grid_offset,
                         m_layout.grid_position(at[b + i]), &ch.enc[i * dims]);
         mlp_forward_batch(shape, params + m_layout.mlp_offset, ch.enc.data(), n, ch.out.data(), &ch.acts);
-        std::vector<Rgb> lin(static_cast<size_t>(K));
-        std::vector<float> wk(static_cast<size_t>(K)), gk(static_cast<size_t>(K));
+        std::vector<Rgb> lin;
+        std::vector<float> wk, gk;
+        std::vector<uint32_t> dirs;  // the [point * K + k] indices of the directions a sample is shaded with
         for (size_t i = 0; i < n; ++i) {
             const uint32_t s = pick[b + i];
             const uint32_t L = S.light_of(s);  // whose normal and light directions (itself unless borrowing)
+            S.light_directions(L, dirs);
+            const size_t KP = dirs.size();
+            lin.resize(KP);
+            wk.resize(KP);
+            gk.resize(KP);
+            const float dir_weight = k_two_pi / float(KP);  // uniform over the hemisphere
             const float* o = &ch.out[i * k_intrinsic_outputs];
             float* d_o = &ch.d_out[i * k_intrinsic_outputs];
             const IntrinsicSample is = intrinsic_from_outputs(o);
@@ -244,12 +256,12 @@ RelightStepStats RelightTrainer::compute_gradient() {
             // indirect light. (On the glossy test sphere the directions' own sum left 24% albedo error, this 5%.)
             Rgb num(0.0f), den(0.0f), indirect_d(0.0f);
             Rgb num2(0.0f), den2(0.0f), indirect_d2(0.0f);  // at r2, for Burley's roughness-dependent lobe
-            for (int k = 0; k < K; ++k) {
-                const size_t sk = size_t(L) * K + k;
+            for (size_t k = 0; k < KP; ++k) {
+                const size_t sk = dirs[k];
                 const Vec3 wi = frame.to_local(S.dir[sk]);
                 wk[k] = 0.0f;
                 if (wi.z <= 0.0f || wo.z <= 0.0f) continue;
-                const EnvTaps taps = env_taps(W, H, S.dir[sk]);
+                const EnvTaps taps = unpack_env_taps(W, H, m_dir_taps[sk]);
                 Rgb le(0.0f);
                 for (int j = 0; j < 4; ++j) le += env[taps.index[j]] * taps.weight[j];
                 lin[k] = le * S.visibility[sk] + S.indirect[sk];
@@ -306,7 +318,7 @@ RelightStepStats RelightTrainer::compute_gradient() {
                 const Vec3 wr = S.normal[L] * (2.0f * wo.z) - wo_w;
                 const auto lobe = [&](float rough, EnvPrefilter::Taps* taps, float* scale) {
                     const float width = specular_lobe_width(rough, wo.z);
-                    const LobeLight ll = lobe_light(S, L, wk.data(), wr, width);
+                    const LobeLight ll = lobe_light(S, dirs, wk.data(), wr, width);
                     *taps = m_prefilter->taps(wr, width);
                     Rgb lr(0.0f);
                     for (int j = 0; j < 8; ++j) lr += env_levels[taps->index[j]] * taps->weight[j];
@@ -370,10 +382,10 @@ RelightStepStats RelightTrainer::compute_gradient() {
                                 d_c[ch3] * e * spec_scale * spec_taps.weight[j];
                 }
             }
-            for (int k = 0; k < K; ++k) {
+            for (size_t k = 0; k < KP; ++k) {
                 if (wk[k] == 0.0f) continue;
-                const size_t sk = size_t(L) * K + k;
-                const EnvTaps taps = env_taps(W, H, S.dir[sk]);
+                const size_t sk = dirs[k];
+                const EnvTaps taps = unpack_env_taps(W, H, m_dir_taps[sk]);
                 Rgb d_le(0.0f);  // dLoss / d(the environment's radiance toward direction k)
                 if (ratio_diffuse) {
                     // d ratio / d le_k = g_k (V_k - ratio) / den
@@ -409,8 +421,26 @@ RelightStepStats RelightTrainer::compute_gradient() {
                            ch.d_mlp.data(), ch.d_enc.data());
     });
 
-    std::fill(m_grads.begin(), m_grads.end(), 0.0f);
     float* grads = m_grads.data();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_grads.size(), size_t(1) << 16),
+                      [&](const tbb::blocked_range<size_t>& r) { std::fill(grads + r.begin(), grads + r.end(), 0.0f); });
+    // The hash grid's gradient: each level's entries are its own, so the levels run in parallel, each summing
+    // over the batch's points in order (the same sums as one pass over the points).
+    const HashGridConfig& grid = m_layout.grid;
+    const int nf = grid.features_per_level;
+    tbb::parallel_for(0, grid.levels, [&](int l) {
+        float* d_grid = grads + m_layout.grid_offset;
+        for (size_t c = 0; c < n_chunks; ++c) {
+            const size_t b = c * k_points_per_task, n = std::min(k_points_per_task, batch - b);
+            for (size_t i = 0; i < n; ++i) {
+                HashCorner corners[8];
+                hash_level_corners(grid, levels.level[l], l, m_layout.grid_position(at[b + i]), corners);
+                const float* d = &chunks[c].d_enc[i * dims + size_t(l) * nf];
+                for (int k = 0; k < 8; ++k)
+                    for (int f = 0; f < nf; ++f) d_grid[size_t(corners[k].index) * nf + f] += corners[k].weight * d[f];
+            }
+        }
+    });
     RelightStepStats stats;
     double prior = 0;  // the priors' part of the objective
     for (size_t c = 0; c < n_chunks; ++c) {
@@ -419,10 +449,6 @@ RelightStepStats RelightTrainer::compute_gradient() {
         for (size_t i = 0; i < n_env * 3; ++i) grads[m_env_offset + i] += ch.d_env[i];
         if (m_settings.learn_exposure)
             for (size_t i = 0; i < m_images; ++i) grads[m_exposure_offset + i] += ch.d_exposure[i];
-        const size_t b = c * k_points_per_task, n = std::min(k_points_per_task, batch - b);
-        for (size_t i = 0; i < n; ++i)
-            hash_encode_backward(m_layout.grid, m_layout.grid_position(at[b + i]), &ch.d_enc[i * dims],
-                                 grads + m_layout.grid_offset);
         stats.loss += ch.loss;
         stats.mse += ch.se;
         stats.normal_loss += ch.normal_loss;

@@ -2,7 +2,8 @@
 // environment and an exposure per image to the training pixels, with the trained NeRF's density fixed. For each
 // point of RelightSamples the predicted colour is
 //   C = e_image * [(2 pi / K) sum_k (V_k L_env(w_k) + R_k) a f_d(r, n; w_o, w_k) max(0, n . w_k) + S]
-// (Monte Carlo over the hemisphere with the precomputed visibility V and the NeRF's indirect light R), with a f_d
+// (Monte Carlo over the hemisphere with the precomputed visibility V and the NeRF's indirect light R; the K
+// directions are the point's own and its pooled neighbours': RelightSamples::light_directions), with a f_d
 // + f_s the relit renderer's BSDF (intrinsic_bsdf, with the settings' diffuse lobe: Burley's depends on r) in the
 // frame of the density normal n, and S its specular part. With SpecularEstimate::prefiltered (the default,
 // specular_prefilter.h) S is the split sum E_s(mu_o, r) (V_r L_r + R_r) about the mirror direction, L_r the
@@ -22,6 +23,7 @@
 #include "materials/principled.h"
 #include "nerf/adam.h"
 #include "nerf/nerf_model.h"
+#include "nerf/relight/relight_env.h"
 #include "nerf/relight/relight_samples.h"
 
 namespace npt::nerf {
@@ -93,6 +95,7 @@ class RelightTrainer {
     size_t m_env_offset = 0, m_exposure_offset = 0, m_total = 0;
     size_t m_images = 0;
     std::vector<float> m_params, m_grads;
+    std::vector<PackedEnvTaps> m_dir_taps;  // per light direction of the samples: its environment lookup
     Adam m_adam;
     // With SpecularEstimate::prefiltered or DiffuseEstimate::ratio.
     std::shared_ptr<const DirectionalAlbedoTable> m_albedo_table;

@@ -1,5 +1,8 @@
 #include "nerf/relight/specular_prefilter.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -126,27 +129,33 @@ EnvPrefilter::EnvPrefilter(int width, int height) : m_width(width), m_height(hei
             row = std::move(kept);
         }
     }
+    m_columns.resize(n);
+    for (size_t r = 0; r < m_rows.size(); ++r)
+        for (const Entry& e : m_rows[r]) m_columns[e.u].push_back({uint32_t(r), e.w});
 }
 
 void EnvPrefilter::apply(const std::vector<Rgb>& env, std::vector<Rgb>& levels) const {
     const size_t n = texels();
     levels.assign(size_t(k_planes) * n, Rgb(0.0f));
     std::copy(env.begin(), env.begin() + ptrdiff_t(n), levels.begin());
-    for (size_t r = 0; r < m_rows.size(); ++r) {
-        Rgb sum(0.0f);
-        for (const Entry& e : m_rows[r]) sum += env[e.u] * e.w;
-        levels[n + r] = sum;
-    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m_rows.size(), 64), [&](const tbb::blocked_range<size_t>& b) {
+        for (size_t r = b.begin(); r < b.end(); ++r) {
+            Rgb sum(0.0f);
+            for (const Entry& e : m_rows[r]) sum += env[e.u] * e.w;
+            levels[n + r] = sum;
+        }
+    });
 }
 
 void EnvPrefilter::backprop(const std::vector<Rgb>& d_levels, std::vector<Rgb>& d_env) const {
     const size_t n = texels();
-    for (size_t t = 0; t < n; ++t) d_env[t] += d_levels[t];
-    for (size_t r = 0; r < m_rows.size(); ++r) {
-        const Rgb g = d_levels[n + r];
-        if (g.x == 0.0f && g.y == 0.0f && g.z == 0.0f) continue;
-        for (const Entry& e : m_rows[r]) d_env[e.u] += g * e.w;
-    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 16), [&](const tbb::blocked_range<size_t>& b) {
+        for (size_t u = b.begin(); u < b.end(); ++u) {
+            Rgb sum = d_env[u] + d_levels[u];
+            for (const Entry& e : m_columns[u]) sum += d_levels[n + e.u] * e.w;
+            d_env[u] = sum;
+        }
+    });
 }
 
 EnvPrefilter::Taps EnvPrefilter::taps(Vec3 dir, float width) const {

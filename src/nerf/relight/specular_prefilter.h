@@ -72,6 +72,9 @@ class EnvPrefilter {
     };
     int m_width, m_height;
     std::vector<std::vector<Entry>> m_rows;  // [(plane - 1) * texels() + t]: plane's weights of texel t
+    // The transpose, for a parallel backprop: [u] the (row, weight) pairs that read texel u, rows ascending
+    // (so each texel sums in the same order as a scatter over the rows would).
+    std::vector<std::vector<Entry>> m_columns;
 };
 
 }  // namespace npt::nerf
