@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
@@ -91,8 +92,37 @@ TEST(RelightSamples, BorrowingPixelsTakeTheLightOfANearbyFacingPoint) {
         EXPECT_LT(length(s.position[i] - s.position[d]), 0.05f);
         EXPECT_GT(dot(s.normal[d], s.wo[i]), 0.1f);
         EXPECT_EQ(s.draw_position(i, 0).x, s.position[i].x);
+        // The nearest facing lit point (by brute force), whichever grid found it.
+        float nearest = 1e30f;
+        for (size_t j = 0; j < s.lit; ++j)
+            if (dot(s.normal[j], s.wo[i]) > 0.1f) nearest = std::min(nearest, length(s.position[j] - s.position[i]));
+        EXPECT_FLOAT_EQ(length(s.position[d] - s.position[i]), nearest);
     }
     for (size_t i = 0; i < s.lit; ++i) EXPECT_EQ(s.light_of(i), i);
+
+    // Dense points: the donor is looked for within the points' spacing first (2.5x the median distance of the
+    // 4th neighbour, here under the radius), and is still the nearest facing one.
+    ss.points = 4096;
+    ss.borrow_radius = 0.08f;
+    const RelightSamples dense = gather_relight_samples(model, train, *query, ss);
+    std::vector<float> fourth;
+    for (size_t i = 0; i < dense.lit; i += 64) {
+        std::vector<float> d;
+        for (size_t j = 0; j < dense.lit; ++j)
+            if (j != i) d.push_back(length(dense.position[j] - dense.position[i]));
+        std::nth_element(d.begin(), d.begin() + 3, d.end());
+        fourth.push_back(d[3]);
+    }
+    std::nth_element(fourth.begin(), fourth.begin() + std::ptrdiff_t(fourth.size() / 2), fourth.end());
+    ASSERT_LT(2.5f * fourth[fourth.size() / 2], 0.8f * ss.borrow_radius);
+    ASSERT_GT(dense.size(), dense.lit + 512);
+    for (size_t i = dense.lit; i < dense.size(); ++i) {
+        float nearest = 1e30f;
+        for (size_t j = 0; j < dense.lit; ++j)
+            if (dot(dense.normal[j], dense.wo[i]) > 0.1f)
+                nearest = std::min(nearest, length(dense.position[j] - dense.position[i]));
+        ASSERT_FLOAT_EQ(length(dense.position[dense.light_of(i)] - dense.position[i]), nearest) << i;
+    }
     ss.borrow_radius = 0.0f;
     EXPECT_THROW(gather_relight_samples(model, train, *query, ss), Error);
 }

@@ -173,30 +173,31 @@ class PointGrid {
     std::vector<std::pair<uint64_t, uint32_t>> m_keyed;
 };
 
+// A search radius matched to the lit points' spacing (millions of points on a GPU lie ~30x closer than the
+// CPU's thousands): 2.5x the median distance to the count-th neighbour (normals agreeing: cosine > min_cos) of
+// 256 probe points, at most coarse's radius, so that a search scans about a hundred points instead of
+// thousands. Coarse's radius where most probes have fewer neighbours than that within it.
+float spacing_radius(const RelightSamples& out, const PointGrid& coarse, int count, float min_cos, float max_radius) {
+    std::vector<float> reach;
+    std::vector<uint32_t> near;
+    const size_t probes = std::min<size_t>(out.lit, 256);
+    for (size_t i = 0; i < probes; ++i) {
+        const uint32_t j = uint32_t(i * out.lit / probes);
+        coarse.nearest_agreeing(j, count, min_cos, near);
+        if (near.size() == size_t(count)) reach.push_back(length(out.position[near.back()] - out.position[j]));
+    }
+    if (reach.size() * 2 <= probes) return max_radius;
+    std::nth_element(reach.begin(), reach.begin() + std::ptrdiff_t(reach.size() / 2), reach.end());
+    return std::min(max_radius, std::max(2.5f * reach[reach.size() / 2], 1e-6f));
+}
+
 // The pooled neighbours of every lit point (settings.pooled_neighbours; RelightSamples::neighbour): the nearest
-// within borrow_radius, searched within a radius matched to the points' spacing.
+// within borrow_radius whose normals agree, searched within spacing_radius.
 void pool_neighbours(const RelightSampleSettings& settings, RelightSamples& out) {
     constexpr float k_min_cos = 0.9f;  // normals within ~25 degrees see about the same hemisphere
     const int M = settings.pooled_neighbours;
-    // The search radius follows the points' density (millions of points on a GPU lie ~30x closer than the
-    // CPU's thousands): 2.5x the median distance of the M-th neighbour of a few points, at most borrow_radius,
-    // so that each search scans about a hundred points instead of thousands.
-    float radius = settings.borrow_radius;
-    {
-        const PointGrid coarse(out.position, out.normal, radius);
-        std::vector<float> reach;
-        std::vector<uint32_t> near;
-        const size_t probes = std::min<size_t>(out.lit, 256);
-        for (size_t i = 0; i < probes; ++i) {
-            const uint32_t j = uint32_t(i * out.lit / probes);
-            coarse.nearest_agreeing(j, M, k_min_cos, near);
-            if (near.size() == size_t(M)) reach.push_back(length(out.position[near.back()] - out.position[j]));
-        }
-        if (reach.size() * 2 > probes) {
-            std::nth_element(reach.begin(), reach.begin() + std::ptrdiff_t(reach.size() / 2), reach.end());
-            radius = std::min(radius, std::max(2.5f * reach[reach.size() / 2], 1e-6f));
-        }
-    }
+    const float radius = spacing_radius(out, PointGrid(out.position, out.normal, settings.borrow_radius), M,
+                                        k_min_cos, settings.borrow_radius);
     const PointGrid lit_points(out.position, out.normal, radius);
     out.neighbours = M;
     out.neighbour.assign(out.lit * size_t(M), RelightSamples::k_no_neighbour);
@@ -218,6 +219,11 @@ void add_borrowing_pixels(const NerfModel& model, const Dataset& data, FieldQuer
     const Mat4& w2m = model.world_to_model;
     out.lit = out.size();
     const PointGrid lit_points(out.position, out.normal, settings.borrow_radius);
+    // The nearest facing point is looked for within the points' spacing first (exact: any nearer point lies
+    // inside that radius too), within borrow_radius only where that finds none.
+    const float near_radius = spacing_radius(out, lit_points, 4, -1.0f, settings.borrow_radius);
+    std::optional<PointGrid> near_points;
+    if (near_radius < settings.borrow_radius) near_points.emplace(out.position, out.normal, near_radius);
     constexpr size_t k_round = size_t(1) << 18;
     Pcg32 rng(mix64(settings.seed ^ 0x626f72726f77ULL), 0);
     size_t added = 0;
@@ -246,7 +252,10 @@ void add_borrowing_pixels(const NerfModel& model, const Dataset& data, FieldQuer
             }
         std::vector<int64_t> donor(hit.size());
         tbb::parallel_for(size_t(0), hit.size(),
-                          [&](size_t h) { donor[h] = lit_points.nearest_facing(at[h], wo[h]); });
+                          [&](size_t h) {
+                              donor[h] = near_points ? near_points->nearest_facing(at[h], wo[h]) : -1;
+                              if (donor[h] < 0) donor[h] = lit_points.nearest_facing(at[h], wo[h]);
+                          });
         // The further event draws of the pixels that found a donor, on their own camera rays.
         std::vector<size_t> kept;
         for (size_t h = 0; h < hit.size() && added + kept.size() < wanted; ++h)
