@@ -21,7 +21,10 @@ namespace {
 
 constexpr float k_golden = 0.6180339887498949f;
 constexpr int k_tries_per_point = 16;        // pixels drawn for a point before giving up on it
-constexpr size_t k_points_per_round = 2048;  // points whose light directions are marched together
+// Light rays marched together (the points' directions, whole points at a time): as many as one round of the
+// wavefront marcher takes, so that a GPU evaluates its field in large batches (each call's rounds cost a few
+// transfers and a synchronisation whatever their size). A ray's result does not depend on its batch.
+constexpr size_t k_light_rays_per_round = size_t(1) << 17;
 
 struct Point {
     bool ok = false;
@@ -400,8 +403,9 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
     for (size_t j = 0; j < n; ++j)  // smoothing may turn a normal past the horizon of its own view
         if (dot(out.normal[j], out.wo[j]) < 0.0f) out.normal[j] = points[found[j]].normal;
     const float min_step = model.march_params().min_step;
-    for (size_t begin = 0; begin < n; begin += k_points_per_round) {
-        const size_t end = std::min(n, begin + k_points_per_round);
+    const size_t points_per_round = std::max<size_t>(1, k_light_rays_per_round / size_t(K));
+    for (size_t begin = 0; begin < n; begin += points_per_round) {
+        const size_t end = std::min(n, begin + points_per_round);
         std::vector<WaveRay> rays((end - begin) * K);
         tbb::parallel_for(begin, end, [&](size_t j) {
             Pcg32& rng = rngs[found[j]];
