@@ -171,6 +171,21 @@ TEST(RelightSamples, PooledNeighboursAreNearbyLitPointsWithAgreeingNormals) {
         if (s.neighbour[i * 3] != RelightSamples::k_no_neighbour) EXPECT_EQ(dirs[4], s.neighbour[i * 3] * 4);
     }
     EXPECT_GT(pooled, s.lit * 2);  // 512 points on two spheres: most have 3 neighbours within 0.08
+    // Pooled points draw their own elevations within the strata (alone, every point has the strata's
+    // midpoints), so a point and its neighbours do not repeat them: direction k's cosine to the normal lies in
+    // stratum k, and varies between points.
+    float lowest = 1.0f, highest = 0.0f;
+    for (size_t i = 0; i < s.lit; ++i)
+        for (int k = 0; k < 4; ++k) {
+            const float z = dot(s.dir[i * 4 + size_t(k)], s.normal[i]);
+            EXPECT_LE(z, 1.0f - float(k) / 4.0f + 1e-4f);
+            EXPECT_GE(z, 1.0f - float(k + 1) / 4.0f - 1e-4f);
+            if (k == 0) {
+                lowest = std::min(lowest, z);
+                highest = std::max(highest, z);
+            }
+        }
+    EXPECT_GT(highest - lowest, 0.2f);  // spread over most of the stratum [0.75, 1]
     // Borrowing pixels shade with their donor's pooled directions.
     ASSERT_GT(s.size(), s.lit);
     std::vector<uint32_t> donor_dirs;
