@@ -136,19 +136,24 @@ NPT_HD NPT_INLINE void hash_encode(const HashGridConfig& cfg, const float* param
     hash_encode(cfg, hash_levels(cfg), params, p, out);
 }
 
+// Level l's part of hash_encode_backward: d_params[index * F + f] += weight * d_out[l * F + f] over its 8
+// corners. A level's entries are its own, so callers may run the levels in parallel.
+NPT_HD NPT_INLINE void hash_level_backward(const HashGridConfig& cfg, const HashLevel& lv, int level, Vec3 p,
+                                           const float* d_out, float* d_params) {
+    const int nf = cfg.features_per_level;
+    HashCorner corners[8];
+    hash_level_corners(cfg, lv, level, p, corners);
+    for (int c = 0; c < 8; ++c)
+        for (int f = 0; f < nf; ++f)
+            d_params[size_t(corners[c].index) * nf + f] += corners[c].weight * d_out[level * nf + f];
+}
+
 // d_params[index * F + f] += weight * d_out[l * F + f]: the encoding is linear in the parameters, so this is
-// the exact transpose of hash_encode. Serial accumulation; a parallel caller uses hash_level_corners with
-// atomics.
+// the exact transpose of hash_encode. Serial accumulation; a parallel caller runs hash_level_backward per
+// level, or uses hash_level_corners with atomics.
 NPT_HD NPT_INLINE void hash_encode_backward(const HashGridConfig& cfg, Vec3 p, const float* d_out,
                                             float* d_params) {
-    const int nf = cfg.features_per_level;
-    for (int l = 0; l < cfg.levels; ++l) {
-        HashCorner corners[8];
-        hash_level_corners(cfg, l, p, corners);
-        for (int c = 0; c < 8; ++c)
-            for (int f = 0; f < nf; ++f)
-                d_params[size_t(corners[c].index) * nf + f] += corners[c].weight * d_out[l * nf + f];
-    }
+    for (int l = 0; l < cfg.levels; ++l) hash_level_backward(cfg, hash_level(cfg, l), l, p, d_out, d_params);
 }
 
 }  // namespace npt::nerf

@@ -21,10 +21,6 @@ namespace {
 
 constexpr float k_golden = 0.6180339887498949f;
 constexpr int k_tries_per_point = 16;        // pixels drawn for a point before giving up on it
-// Light rays marched together (the points' directions, whole points at a time): as many as one round of the
-// wavefront marcher takes, so that a GPU evaluates its field in large batches (each call's rounds cost a few
-// transfers and a synchronisation whatever their size). A ray's result does not depend on its batch.
-constexpr size_t k_light_rays_per_round = size_t(1) << 17;
 
 struct Point {
     bool ok = false;
@@ -114,24 +110,14 @@ class PointGrid {
 
     // The nearest point within the radius whose normal faces wo (normal . wo > 0.1); -1 where there is none.
     int64_t nearest_facing(Vec3 p, Vec3 wo) const {
-        const std::array<int64_t, 3> c = cell_of(p);
         float best = m_radius * m_radius;
         int64_t found = -1;
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const uint64_t key = key_of({c[0] + dx, c[1] + dy, c[2] + dz});
-                    auto it =
-                        std::lower_bound(m_keyed.begin(), m_keyed.end(), std::make_pair(key, uint32_t(0)));
-                    for (; it != m_keyed.end() && it->first == key; ++it) {
-                        const Vec3 d = m_points[it->second] - p;
-                        const float d2 = dot(d, d);
-                        if (d2 < best && dot(m_normals[it->second], wo) > 0.1f) {
-                            best = d2;
-                            found = it->second;
-                        }
-                    }
-                }
+        for_each_within(p, [&](uint32_t q, float d2) {
+            if (d2 < best && dot(m_normals[q], wo) > 0.1f) {
+                best = d2;
+                found = q;
+            }
+        });
         return found;
     }
 
@@ -139,23 +125,11 @@ class PointGrid {
     // (cosine > min_cos), nearest first, into out (cleared).
     void nearest_agreeing(uint32_t self, int count, float min_cos, std::vector<uint32_t>& out) const {
         out.clear();
-        const Vec3 p = m_points[self], n = m_normals[self];
-        const std::array<int64_t, 3> c = cell_of(p);
+        const Vec3 n = m_normals[self];
         std::vector<std::pair<float, uint32_t>> near;
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const uint64_t key = key_of({c[0] + dx, c[1] + dy, c[2] + dz});
-                    auto it =
-                        std::lower_bound(m_keyed.begin(), m_keyed.end(), std::make_pair(key, uint32_t(0)));
-                    for (; it != m_keyed.end() && it->first == key; ++it) {
-                        if (it->second == self) continue;
-                        const Vec3 d = m_points[it->second] - p;
-                        const float d2 = dot(d, d);
-                        if (d2 < m_radius * m_radius && dot(m_normals[it->second], n) > min_cos)
-                            near.push_back({d2, it->second});
-                    }
-                }
+        for_each_within(m_points[self], [&](uint32_t q, float d2) {
+            if (q != self && dot(m_normals[q], n) > min_cos) near.push_back({d2, q});
+        });
         const size_t keep = std::min(near.size(), size_t(count));
         std::partial_sort(near.begin(), near.begin() + keep, near.end());
         for (size_t i = 0; i < keep; ++i) out.push_back(near[i].second);
@@ -165,6 +139,22 @@ class PointGrid {
     std::array<int64_t, 3> cell_of(Vec3 p) const {
         return {int64_t(std::floor(p.x * m_inv)), int64_t(std::floor(p.y * m_inv)),
                 int64_t(std::floor(p.z * m_inv))};
+    }
+    // f(point, squared distance) for every point closer to p than the radius (the 27 cells around p's).
+    template <class F>
+    void for_each_within(Vec3 p, F&& f) const {
+        const std::array<int64_t, 3> c = cell_of(p);
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const uint64_t key = key_of({c[0] + dx, c[1] + dy, c[2] + dz});
+                    auto it = std::lower_bound(m_keyed.begin(), m_keyed.end(), std::make_pair(key, uint32_t(0)));
+                    for (; it != m_keyed.end() && it->first == key; ++it) {
+                        const Vec3 d = m_points[it->second] - p;
+                        const float d2 = dot(d, d);
+                        if (d2 < m_radius * m_radius) f(it->second, d2);
+                    }
+                }
     }
     static uint64_t key_of(const std::array<int64_t, 3>& c) {
         return (uint64_t(c[0] & 0x1fffff) << 42) | (uint64_t(c[1] & 0x1fffff) << 21) |
@@ -403,7 +393,10 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
     for (size_t j = 0; j < n; ++j)  // smoothing may turn a normal past the horizon of its own view
         if (dot(out.normal[j], out.wo[j]) < 0.0f) out.normal[j] = points[found[j]].normal;
     const float min_step = model.march_params().min_step;
-    const size_t points_per_round = std::max<size_t>(1, k_light_rays_per_round / size_t(K));
+    // Whole points' directions, as many as one round of the marcher takes, so that a GPU evaluates its field in
+    // large batches (each call's rounds cost a few transfers and a synchronisation whatever their size). A ray's
+    // result does not depend on its batch.
+    const size_t points_per_round = std::max<size_t>(1, k_wavefront_round_rays / size_t(K));
     for (size_t begin = 0; begin < n; begin += points_per_round) {
         const size_t end = std::min(n, begin + points_per_round);
         std::vector<WaveRay> rays((end - begin) * K);

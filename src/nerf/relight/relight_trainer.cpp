@@ -426,19 +426,12 @@ RelightStepStats RelightTrainer::compute_gradient() {
                       [&](const tbb::blocked_range<size_t>& r) { std::fill(grads + r.begin(), grads + r.end(), 0.0f); });
     // The hash grid's gradient: each level's entries are its own, so the levels run in parallel, each summing
     // over the batch's points in order (the same sums as one pass over the points).
-    const HashGridConfig& grid = m_layout.grid;
-    const int nf = grid.features_per_level;
-    tbb::parallel_for(0, grid.levels, [&](int l) {
-        float* d_grid = grads + m_layout.grid_offset;
+    tbb::parallel_for(0, m_layout.grid.levels, [&](int l) {
         for (size_t c = 0; c < n_chunks; ++c) {
             const size_t b = c * k_points_per_task, n = std::min(k_points_per_task, batch - b);
-            for (size_t i = 0; i < n; ++i) {
-                HashCorner corners[8];
-                hash_level_corners(grid, levels.level[l], l, m_layout.grid_position(at[b + i]), corners);
-                const float* d = &chunks[c].d_enc[i * dims + size_t(l) * nf];
-                for (int k = 0; k < 8; ++k)
-                    for (int f = 0; f < nf; ++f) d_grid[size_t(corners[k].index) * nf + f] += corners[k].weight * d[f];
-            }
+            for (size_t i = 0; i < n; ++i)
+                hash_level_backward(m_layout.grid, levels.level[l], l, m_layout.grid_position(at[b + i]),
+                                    &chunks[c].d_enc[i * dims], grads + m_layout.grid_offset);
         }
     });
     RelightStepStats stats;

@@ -14,7 +14,6 @@ namespace {
 
 constexpr int k_round_samples = 32;               // samples a live ray takes per round
 constexpr float k_log_stop = -9.2103404f;         // ln(1e-4), as the renderer
-constexpr size_t k_max_round_rays = size_t(1) << 17;  // bounds a round's buffers (~120 MB)
 
 }  // namespace
 
@@ -39,7 +38,7 @@ void march_wavefront(const NerfModel& model, FieldQuery& query, std::vector<Wave
     std::vector<int> count;
     std::vector<size_t> first;
     while (!live.empty()) {
-        const size_t n_live = std::min(live.size(), k_max_round_rays);
+        const size_t n_live = std::min(live.size(), k_wavefront_round_rays);
         const size_t cap = n_live * k_round_samples;
         pos.resize(cap);
         dt.resize(cap);

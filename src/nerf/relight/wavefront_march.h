@@ -4,6 +4,7 @@
 // at their scattering event, or at the end of the box. The same quadrature as the renderer's NeRF march.
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 #include "core/vec.h"
@@ -29,6 +30,9 @@ struct WaveRay {
     bool has_event = false;
     Vec3 event_position{0.0f};
 };
+
+// Live rays in one round at most (bounds a round's buffers, ~120 MB): callers batching rays for a GPU fill one.
+constexpr size_t k_wavefront_round_rays = size_t(1) << 17;
 
 void march_wavefront(const NerfModel& model, FieldQuery& query, std::vector<WaveRay>& rays, WaveMode mode);
 
