@@ -22,6 +22,7 @@ export LD_LIBRARY_PATH=/tmp/nerfpt-gpu/lib
 bin=/tmp/nerfpt-gpu/bin
 data=.gpu/relight/dev
 work=/tmp/relight
+rm -rf $work  # a warm machine keeps the last call's renders, which the scorer would read as this call's
 mkdir -p $work/pred
 score() {  # score LABEL PRED_DIR [score.py options]
     PYTHONPATH=scripts/exr_shim python3 .gpu/relight/score.py $data "$2" --label "$1" "${@:3}" | tee -a "$out/score.log"
