@@ -490,14 +490,16 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         record.finish("isolate", {{"occupied_before", st.occupied_before},
                                   {"occupied_after", st.occupied_after},
                                   {"cut_by_region", st.cut_by_region},
+                                  {"cut_off_footprint", st.cut_off_footprint},
                                   {"cut_as_floaters", st.cut_as_floaters},
                                   {"floaters", st.components - st.kept_components},
                                   {"scene_model", keep ? "model_scene.npt" : ""},
                                   {"seconds", clock.seconds()}});
         if (!global.quiet)
-            fmt::print("isolate: {} of {} occupied cells kept ({} outside the box or under the plane, {} in {} "
-                       "floaters){}\n",
-                       st.occupied_after, st.occupied_before, st.cut_by_region, st.cut_as_floaters,
+            fmt::print("isolate: {} of {} occupied cells kept ({} outside the box or under the plane, {} of the "
+                       "table around the foot, {} in {} floaters){}\n",
+                       st.occupied_after, st.occupied_before, st.cut_by_region, st.cut_off_footprint,
+                       st.cut_as_floaters,
                        st.components - st.kept_components,
                        keep               ? "; the whole scene is model_scene.npt"
                        : args.keep_scene ? "; --keep-scene: model.npt was isolated in an earlier run without it, "

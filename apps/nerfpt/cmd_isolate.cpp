@@ -18,7 +18,9 @@ CLI::App* add_isolate_command(CLI::App& app, IsolateArgs& args) {
     cmd->footer(
         "The model must carry an object frame (`nerfpt capture` stores it). Every occupancy cell that does not\n"
         "overlap the object's box, or lies wholly below --plane-margin cells above the supporting plane, is\n"
-        "emptied, then every 26-connected component of occupied cells but the largest with fewer than\n"
+        "emptied; in the table layer (--table-layer cells above the plane, where the table's own density\n"
+        "reaches) only the cells under the object's footprint stay (the dense cells above the layer, seen\n"
+        "from above, widened by a cell); then every 26-connected component of occupied cells but the largest with fewer than\n"
         "--min-component cells. Renders skip empty cells, so the table, the props and the floaters vanish, and\n"
         "the model is marked object-only: eval, view and bake then show only what lies in its box, cut exactly at\n"
         "the box and the plane (as --object does, and as a scene's \"placement\": \"object\" always does).\n"
@@ -31,6 +33,19 @@ CLI::App* add_isolate_command(CLI::App& app, IsolateArgs& args) {
                     "(0: those straddling the plane stay; renders cut at the plane exactly)")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--table-layer", args.settings.table_layer_cells,
+                    "Height above the supporting plane, in cells of the finest cascade, below which only the "
+                    "object's footprint stays (0: the plane alone cuts)")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--footprint-margin", args.settings.footprint_margin_cells,
+                    "How far the footprint reaches beyond the object's dense cells, in cells")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--footprint-opacity", args.settings.footprint_opacity,
+                    "Opacity across a cell from which a cell above the table layer counts as the object's")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 0.999));
     cmd->add_option("--min-component", args.settings.min_component_cells,
                     "Smallest component kept apart from the largest, in cells")
         ->capture_default_str()
@@ -47,9 +62,9 @@ int run_isolate(const IsolateArgs& args, const GlobalSettings& global) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!global.quiet)
         fmt::print(
-            "isolate: {} occupied cells -> {} ({} outside the box or under the plane, {} in {} of {} "
-            "components as floaters) in {:.2f} s; wrote {}\n",
-            st.occupied_before, st.occupied_after, st.cut_by_region, st.cut_as_floaters,
+            "isolate: {} occupied cells -> {} ({} outside the box or under the plane, {} of the table around "
+            "the foot, {} in {} of {} components as floaters) in {:.2f} s; wrote {}\n",
+            st.occupied_before, st.occupied_after, st.cut_by_region, st.cut_off_footprint, st.cut_as_floaters,
             st.components - st.kept_components, st.components, seconds, args.output);
     return 0;
 }

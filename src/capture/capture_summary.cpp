@@ -112,9 +112,10 @@ std::vector<CaptureStageRow> capture_stage_rows(const nlohmann::json& record) {
         rows.push_back(
             row("isolate", "isolate",
                 fmt::format("model.npt: the object alone, {} of {} occupied cells kept ({} outside the "
-                            "box or under the plane, {} in {} floaters){}",
+                            "box or under the plane, {} of the table around the foot, {} in {} floaters){}",
                             value<uint64_t>(i, "occupied_after", 0), value<uint64_t>(i, "occupied_before", 0),
-                            value<uint64_t>(i, "cut_by_region", 0), value<uint64_t>(i, "cut_as_floaters", 0),
+                            value<uint64_t>(i, "cut_by_region", 0), value<uint64_t>(i, "cut_off_footprint", 0),
+                            value<uint64_t>(i, "cut_as_floaters", 0),
                             value<uint64_t>(i, "floaters", 0),
                             text(i, "scene_model").empty() ? "" : "; the whole scene: model_scene.npt"),
                 i));

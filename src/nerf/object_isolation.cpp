@@ -13,6 +13,78 @@ namespace {
 
 Vec3 row_of(const Mat4& m, size_t r) { return {float(m.m[r][0]), float(m.m[r][1]), float(m.m[r][2])}; }
 
+// Centre of cell (x, y, z) of cascade 0 in object space.
+Vec3 object_centre(const IsolationInput& in, int64_t x, int64_t y, int64_t z) {
+    const float h = 1.0f / float(in.resolution);
+    return in.model_to_object.transform_point(
+        Vec3{(float(x) + 0.5f) * h, (float(y) + 0.5f) * h, (float(z) + 0.5f) * h});
+}
+
+// The table-layer rule (IsolationSettings::table_layer_cells): cells of cascade 0 in the region whose centre
+// lies below the layer leave it unless they lie under the object's footprint. Returns the occupied cells cut.
+int64_t cut_table_layer(const std::vector<float>& density, float occupied_threshold, const IsolationInput& in,
+                        const IsolationSettings& s, float cell0, const Vec3& extent, std::vector<uint8_t>& in_region) {
+    const int64_t R = in.resolution;
+    const float layer = float(s.table_layer_cells) * cell0;
+    // The footprint on a raster of half a cell over the box (plus the margin), in object x and y.
+    const float spacing = 0.5f * cell0;
+    const float margin = float(s.footprint_margin_cells) * cell0;
+    const float x0 = in.box_min.x - margin - cell0, y0 = in.box_min.y - margin - cell0;
+    const int64_t nx = int64_t(std::ceil((in.box_max.x - in.box_min.x + 2 * (margin + cell0)) / spacing)) + 1;
+    const int64_t ny = int64_t(std::ceil((in.box_max.y - in.box_min.y + 2 * (margin + cell0)) / spacing)) + 1;
+    if (nx <= 0 || ny <= 0 || nx * ny > (int64_t(1) << 26)) return 0;
+    const auto pixel = [&](const Vec3& o, int64_t& px, int64_t& py) {
+        px = int64_t(std::floor((o.x - x0) / spacing));
+        py = int64_t(std::floor((o.y - y0) / spacing));
+        return px >= 0 && py >= 0 && px < nx && py < ny;
+    };
+    // Opacity across one cell of cascade 0 (min_step: IsolationInput) against the footprint's threshold.
+    const float dense = -std::log(1.0f - std::min(float(s.footprint_opacity), 0.999f)) * float(R) * in.min_step;
+    std::vector<uint8_t> marked(size_t(nx * ny), 0);
+    bool any = false;
+    for (int64_t z = 0; z < R; ++z)
+        for (int64_t y = 0; y < R; ++y)
+            for (int64_t x = 0; x < R; ++x) {
+                const size_t i = size_t(x + y * R + z * R * R);
+                if (!in_region[i] || !(density[i] >= dense) || !(density[i] > occupied_threshold)) continue;
+                const Vec3 o = object_centre(in, x, y, z);
+                int64_t px, py;
+                if (o.z < layer || !pixel(o, px, py)) continue;
+                marked[size_t(px + py * nx)] = 1;
+                any = true;
+            }
+    if (!any) return 0;  // nothing dense above the layer: the rule has no footprint to keep, so it cuts nothing
+    // Widened by the margin plus the half extent of a cell (a cell centre marks its whole cell).
+    const float reach = margin + 0.5f * std::max(extent.x, extent.y) * (1.0f / float(R));
+    const int64_t r = int64_t(std::ceil(reach / spacing));
+    std::vector<uint8_t> under(marked.size(), 0);
+    for (int64_t py = 0; py < ny; ++py)
+        for (int64_t px = 0; px < nx; ++px) {
+            if (!marked[size_t(px + py * nx)]) continue;
+            for (int64_t dy = -r; dy <= r; ++dy)
+                for (int64_t dx = -r; dx <= r; ++dx) {
+                    const int64_t qx = px + dx, qy = py + dy;
+                    if (qx < 0 || qy < 0 || qx >= nx || qy >= ny) continue;
+                    if (float(dx * dx + dy * dy) * spacing * spacing > reach * reach) continue;
+                    under[size_t(qx + qy * nx)] = 1;
+                }
+        }
+    int64_t cut = 0;
+    for (int64_t z = 0; z < R; ++z)
+        for (int64_t y = 0; y < R; ++y)
+            for (int64_t x = 0; x < R; ++x) {
+                const size_t i = size_t(x + y * R + z * R * R);
+                if (!in_region[i]) continue;
+                const Vec3 o = object_centre(in, x, y, z);
+                if (o.z >= layer) continue;
+                int64_t px, py;
+                if (pixel(o, px, py) && under[size_t(px + py * nx)]) continue;
+                in_region[i] = 0;
+                cut += density[i] > occupied_threshold;
+            }
+    return cut;
+}
+
 }  // namespace
 
 IsolationStats isolate_object(std::vector<float>& density, const IsolationInput& in,
@@ -70,6 +142,9 @@ IsolationStats isolate_object(std::vector<float>& density, const IsolationInput&
                     if (occupied && !inside) ++st.cut_by_region;
                 }
     }
+
+    if (s.table_layer_cells > 0 && in.min_step > 0)
+        st.cut_off_footprint = cut_table_layer(density, threshold, in, s, cell0, extent, in_region);
 
     // 26-connected components of the occupied cells of cascade 0 inside the region (flood fill with a stack).
     std::vector<int32_t> label(size_t(per_cascade), -1);
@@ -135,6 +210,7 @@ IsolationStats isolate_model(NerfModel& model, const IsolationSettings& s, const
     in.model_to_object = model_to_object(*model.object, model.world_to_model);
     in.box_min = model.object->box_min;
     in.box_max = model.object->box_max;
+    in.min_step = model.march_params().min_step;
     std::vector<float> density = model.occupancy.density();
     const IsolationStats st = isolate_object(density, in, s);
     model.occupancy.set_density(std::move(density), in.occupied_threshold);

@@ -25,6 +25,15 @@ struct IsolationSettings {
     // the grid resolves a feature only with two cells per axis (sampling), so a smaller component is below
     // what the grid can represent of a real part and is taken for a floater.
     int64_t min_component_cells = 8;
+    // The table's own density (a NeRF's surface is a few millimetres thick) reaches above the fitted plane
+    // and, inside the box's margin around the object's foot, rendered as a ring of table (docs/benchmarks.md,
+    // "the table around the foot"). Cells of cascade 0 whose centre lies below this many cells above the
+    // plane are kept only under the object's footprint: the vertical projection of the cells above that
+    // layer that are dense (opacity across the cell >= footprint_opacity), widened by footprint_margin_cells.
+    // 0: no layer (the plane alone cuts).
+    double table_layer_cells = 2.0;
+    double footprint_opacity = 0.5;
+    double footprint_margin_cells = 1.0;
 };
 
 // The grid and the object's place, in plain numbers so that a synthetic grid can be tested.
@@ -34,11 +43,15 @@ struct IsolationInput {
     Mat4 model_to_object;              // model space ([0,1]^3 cube, occupancy_view.h) -> object space (+Z up,
                                        // supporting plane z = 0)
     Vec3 box_min, box_max;             // the object's box in object space
+    // The march's smallest step in model units: the grid stores sigma x min_step (occupancy_grid.h), so the
+    // opacity across a cell of cascade c is 1 - exp(-density x 2^c / (resolution x min_step)).
+    float min_step = 0.0f;
 };
 
 struct IsolationStats {
     int64_t occupied_before = 0;
     int64_t cut_by_region = 0;    // occupied cells outside the box or under the plane
+    int64_t cut_off_footprint = 0;  // occupied cells of the table layer outside the object's footprint
     int64_t cut_as_floaters = 0;  // occupied cells in dropped components
     int64_t components = 0;       // components of cascade 0 inside the region
     int64_t kept_components = 0;

@@ -142,6 +142,49 @@ TEST(ObjectIsolation, CellsStraddlingThePlaneOrTheBoxStay) {
     EXPECT_EQ(d, before);
 }
 
+// The table's density reaching above the plane (a slab 1.5 cells thick across the whole box) under a cylinder
+// standing on it: the table layer keeps only what lies under the cylinder's footprint.
+float axis_distance(Vec3 p) { return std::hypot(p.x - 0.5f, p.y - 0.5f); }
+bool in_table_layer(Vec3 p) { return p.z > 0.29f && p.z < 0.34f; }  // cells 9 and 10: object z -0.1 .. 0.9 cells
+bool in_cylinder(Vec3 p) { return axis_distance(p) < 0.1f && p.z > 0.29f && p.z < 0.6f; }
+// Cells that overlap the box's sides (input(): +-0.3 around x = y = 0.5): the region the plane and box keep.
+bool in_box_columns(Vec3 p) {
+    const float reach = 0.3f + 0.5f / k_res;
+    return std::fabs(p.x - 0.5f) < reach && std::fabs(p.y - 0.5f) < reach;
+}
+
+TEST(ObjectIsolation, TheTableLayerKeepsOnlyTheObjectsFootprint) {
+    const float cell = 1.0f / k_res;
+    IsolationInput in = input();
+    in.min_step = 1.0f / (2.0f * k_res);  // density 1: opacity 1 - e^-2 = 0.86 across a cell, dense
+    std::vector<float> d = grid_of([](Vec3 p) { return in_table_layer(p) || in_cylinder(p); });
+    const IsolationSettings s;  // a layer of 2 cells, the footprint widened by 1 cell
+    ASSERT_EQ(s.table_layer_cells, 2.0);
+    const IsolationStats st = isolate_object(d, in, s);
+    int64_t cut = 0;
+    for (size_t i = 0; i < d.size(); ++i) {
+        const Vec3 p = centre_of(int64_t(i));
+        if (in_cylinder(p)) EXPECT_GT(d[i], 0) << "cylinder cell " << i << " cut";
+        // Beyond the footprint's reach (1 cell of margin, half a cell for the marking cell's extent, half a
+        // cell of the footprint raster), no table is left.
+        if (in_table_layer(p) && axis_distance(p) > 0.1f + 2.0f * cell) EXPECT_EQ(d[i], 0) << "table cell " << i;
+        cut += in_table_layer(p) && !in_cylinder(p) && in_box_columns(p) && d[i] == 0;
+    }
+    EXPECT_GT(cut, 100);
+    EXPECT_EQ(st.cut_off_footprint, cut);
+
+    // Without the layer (or without a dense cell above it) the plane alone cuts: the whole slab stays.
+    IsolationSettings off = s;
+    off.table_layer_cells = 0;
+    std::vector<float> d_off = grid_of([](Vec3 p) { return in_table_layer(p) || in_cylinder(p); });
+    EXPECT_EQ(isolate_object(d_off, in, off).cut_off_footprint, 0);
+    std::vector<float> slab_only = grid_of(in_table_layer);
+    EXPECT_EQ(isolate_object(slab_only, in, s).cut_off_footprint, 0);
+    for (size_t i = 0; i < slab_only.size(); ++i)
+        if (in_table_layer(centre_of(int64_t(i))) && in_box_columns(centre_of(int64_t(i))))
+            EXPECT_GT(slab_only[i], 0) << "table cell " << i << " cut with no footprint above it";
+}
+
 TEST(ObjectIsolation, RefusesAGridOfTheWrongSize) {
     std::vector<float> d(100, 1.0f);
     EXPECT_THROW(isolate_object(d, input(), IsolationSettings{}), Error);
