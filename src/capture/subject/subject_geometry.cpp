@@ -316,7 +316,10 @@ DenseBox refine_box_with_field(const SubjectGeometry& g, double cell,
     const double pad = 1.5 * cell;
     const double uc = 0.5 * (lo.x() + hi.x()), vc = 0.5 * (lo.y() + hi.y());
     r.base_center = g.from_object(Vector3d(uc, vc, 0));
-    r.height = hi.z() + 0.5 * cell;
+    // The object's top lies somewhere in its topmost occupied cell, whose opacity is its densest sample's: the
+    // cell's centre is the unbiased guess, its top face half a cell high on average (the height sets the
+    // metric scale with --height).
+    r.height = hi.z();
     r.box_min = Vector3d(lo.x() - uc - pad, lo.y() - vc - pad, 0.0);
     r.box_max = Vector3d(hi.x() - uc + pad, hi.y() - vc + pad, hi.z() + pad);
     return out;
