@@ -7,6 +7,7 @@
 #
 #   blender -b --factory-startup --python scripts/make_handheld_capture.py -- OUT_DIR
 #           [--frames 100] [--width 540] [--height 960] [--fov-y 60] [--samples 4] [--seed 1] [--masks 1]
+#           [--kind vase|bottle|stack]
 #
 # Writes OUT_DIR/render/frame_NNNNN.png (existing frames are skipped, so an interrupted run resumes) and
 # OUT_DIR/truth.json (transforms.json layout: fl_x/fl_y/cx/cy/w/h and, per frame, the OpenGL camera-to-world
@@ -16,7 +17,8 @@
 #   ffmpeg -framerate 30 -i OUT_DIR/render/frame_%05d.png -c:v libx264 -crf 18 -pix_fmt yuv420p OUT_DIR/handheld.mp4
 #   nerfpt curate OUT_DIR/handheld.mp4 -o OUT_DIR/frames --target-frames N
 # (curate numbers frames from 0 as the video does, so truth.json's names match; scripts/bench_poses.sh does this.)
-# The seed picks the object, the props' places and the shake, so two seeds give two different captures.
+# The seed picks the object, the props' places and the shake, so two seeds give two different captures; the
+# object's kind is the seed's first draw (seeds 7, 11, 12, 13 are all bottles) unless --kind names it.
 import bpy, sys, os, math, json, random
 from mathutils import Vector, Matrix, Euler
 
@@ -24,7 +26,7 @@ argv = sys.argv[sys.argv.index('--') + 1:] if '--' in sys.argv else []
 if not argv:
     sys.exit('usage: blender -b --factory-startup --python make_handheld_capture.py -- OUT_DIR [--frames N] ...')
 out_dir = os.path.abspath(argv[0])
-opts = {'frames': 100, 'width': 540, 'height': 960, 'fov-y': 60.0, 'samples': 4, 'seed': 1, 'masks': 1}
+opts = {'frames': 100, 'width': 540, 'height': 960, 'fov-y': 60.0, 'samples': 4, 'seed': 1, 'masks': 1, 'kind': ''}
 i = 1
 while i < len(argv):
     key = argv[i].lstrip('-')
@@ -105,7 +107,12 @@ scene.world.use_nodes = True
 scene.world.node_tree.nodes['Background'].inputs['Strength'].default_value = 2.0
 
 # The object: a vase, a bottle or a figure of primitives, with its own texture, at the table's centre.
-kind = rng.choice(['vase', 'bottle', 'stack'])
+kinds = ['vase', 'bottle', 'stack']
+kind = rng.choice(kinds)  # drawn even when --kind names one, so that a seed keeps the rest of its scene
+if opts['kind']:
+    if opts['kind'] not in kinds:
+        sys.exit(f"make_handheld_capture: --kind {opts['kind']}: expected one of {', '.join(kinds)}")
+    kind = opts['kind']
 obj_mat = material('object', rng.choice(['noise', 'voronoi', 'checker']),
                    (rng.random(), rng.random(), rng.random()), (rng.random(), rng.random(), rng.random()),
                    rng.uniform(3, 8), roughness=0.3)
