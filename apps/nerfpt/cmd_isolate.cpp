@@ -19,11 +19,12 @@ CLI::App* add_isolate_command(CLI::App& app, IsolateArgs& args) {
         "The model must carry an object frame (`nerfpt capture` stores it). Every occupancy cell that does not\n"
         "overlap the object's box, or lies wholly below --plane-margin cells above the supporting plane, is\n"
         "emptied; in the table layer (--table-layer cells above the plane, where the table's own density\n"
-        "reaches) only the cells under the object's footprint stay (the dense cells above the layer, seen\n"
-        "from above, widened by a cell); then every 26-connected component of occupied cells but the largest with fewer than\n"
-        "--min-component cells. Renders skip empty cells, so the table, the props and the floaters vanish, and\n"
-        "the model is marked object-only: eval, view and bake then show only what lies in its box, cut exactly at\n"
-        "the box and the plane (as --object does, and as a scene's \"placement\": \"object\" always does).\n"
+        "reaches) only the cells under the object's footprint stay (the cells above the layer at least\n"
+        "--footprint-opacity opaque, seen from above, widened by --footprint-margin cells); then every\n"
+        "26-connected component of occupied cells but the largest with fewer than --min-component cells.\n"
+        "Renders skip empty cells, so the table, the props and the floaters vanish, and the model is marked\n"
+        "object-only: eval, view and bake then show only what lies in its box, cut exactly at the box and\n"
+        "the plane (as --object does, and as a scene's \"placement\": \"object\" always does).\n"
         "The network is unchanged. Training the result further re-estimates the grid and clears the mark.");
     cmd->add_option("model", args.model, "Model file (.npt) with an object frame")->required();
     cmd->add_option("-o,--output", args.output, "Where to write the isolated model (may be the input)")

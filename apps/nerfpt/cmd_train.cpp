@@ -157,8 +157,8 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
            "--relight-pool", args.relight.pooled_neighbours,
            fmt::format("Nearby surface points whose light directions each point also shades with (their "
                        "shadowing and indirect light, no rays of its own): a less noisy shading estimate, "
-                       "so a cleaner albedo, at more fitting time per step (default: {} on a GPU, {} on the CPU)",
-                       k_relight_pool_gpu, k_relight_pool_cpu))
+                       "so a cleaner albedo, at more fitting time per step (default: {})",
+                       k_relight_pool))
         ->check(CLI::Range(0, 64));
     cmd->add_option(
            "--relight-table", args.relight.table_log2,

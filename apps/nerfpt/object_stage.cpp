@@ -171,10 +171,7 @@ ObjectAttach attach_object(const fs::path& path, nlohmann::json& record, double 
             const int c = view.cascade_of(mp);
             const int64_t i = view.cell_index(mp, c);
             if (i < 0) return 0.0;
-            // The grid stores sigma x min_step (occupancy_grid.h): the opacity across one cell of this cascade.
-            const double across = double(density[size_t(i)]) * double(view.cascade_size(c)) /
-                                  (double(view.resolution) * double(min_step));
-            return 1.0 - std::exp(-across);
+            return nerf::occupancy_cell_opacity(density[size_t(i)], view.cascade_size(c), view.resolution, min_step);
         };
         const capture::subject::DenseBox d = capture::subject::refine_box_with_field(g, cell, opacity);
         const capture::subject::SubjectGeometry& r = d.geometry;

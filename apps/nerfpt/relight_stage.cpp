@@ -29,8 +29,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ss.normal_smoothing = options.normal_smoothing;
     ss.borrowing_pixels = options.borrowing_pixels >= 0 ? options.borrowing_pixels
                                                         : (gpu ? k_relight_pixels_gpu : k_relight_pixels_cpu);
-    ss.pooled_neighbours = options.pooled_neighbours >= 0 ? options.pooled_neighbours
-                                                          : (gpu ? k_relight_pool_gpu : k_relight_pool_cpu);
+    ss.pooled_neighbours = options.pooled_neighbours;
     ss.seed = model.config.training.seed;
     StatusLine line(stream_is_tty(stderr), options.quiet);
     std::unique_ptr<nerf::FieldQuery> query = nerf::make_field_query(options.backend, model);

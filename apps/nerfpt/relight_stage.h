@@ -30,7 +30,7 @@ constexpr int k_relight_pixels_gpu = 2097152, k_relight_pixels_cpu = 262144;
 // Pooled neighbours (RelightSampleSettings::pooled_neighbours): on the CPU 8 bought 0.3 dB of albedo for 6 s
 // of fitting (4: 0.3 dB). On an H100 with 16 directions, 8 bought 0.7 dB of albedo (4: 0.6 dB) for 5 s of
 // fitting; train + relight 103 s, inside the 120 s budget (docs/benchmarks.md, "pooled neighbours on a GPU").
-constexpr int k_relight_pool_gpu = 8, k_relight_pool_cpu = 8;
+constexpr int k_relight_pool = 8;  // the same on both backends
 
 struct RelightStageOptions {
     uint64_t steps = 1500;  // optimiser steps of the stage
@@ -46,7 +46,7 @@ struct RelightStageOptions {
     float roughness_prior = nerf::RelightTrainSettings{}.roughness_prior;
     float huber_delta = nerf::RelightTrainSettings{}.huber_delta;
     int borrowing_pixels = -1;  // -1: k_relight_pixels_* of the backend
-    int pooled_neighbours = -1;  // -1: k_relight_pool_* of the backend
+    int pooled_neighbours = k_relight_pool;
     int table_log2 =
         nerf::IntrinsicConfig{}.grid.log2_table_size;  // hash entries per level of the intrinsic grid
     float finest_resolution =

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "core/error.h"
+#include "nerf/occupancy_grid.h"
 
 namespace npt::nerf {
 
@@ -26,7 +27,8 @@ int64_t cut_table_layer(const std::vector<float>& density, float occupied_thresh
                         const IsolationSettings& s, float cell0, const Vec3& extent, std::vector<uint8_t>& in_region) {
     const int64_t R = in.resolution;
     const float layer = float(s.table_layer_cells) * cell0;
-    // The footprint on a raster of half a cell over the box (plus the margin), in object x and y.
+    // The footprint on a raster of half a cell over the box (plus the margin), in object x and y; a point goes
+    // to its nearest raster node, at most sqrt(2) / 4 of a cell away.
     const float spacing = 0.5f * cell0;
     const float margin = float(s.footprint_margin_cells) * cell0;
     const float x0 = in.box_min.x - margin - cell0, y0 = in.box_min.y - margin - cell0;
@@ -34,12 +36,12 @@ int64_t cut_table_layer(const std::vector<float>& density, float occupied_thresh
     const int64_t ny = int64_t(std::ceil((in.box_max.y - in.box_min.y + 2 * (margin + cell0)) / spacing)) + 1;
     if (nx <= 0 || ny <= 0 || nx * ny > (int64_t(1) << 26)) return 0;
     const auto pixel = [&](const Vec3& o, int64_t& px, int64_t& py) {
-        px = int64_t(std::floor((o.x - x0) / spacing));
-        py = int64_t(std::floor((o.y - y0) / spacing));
+        px = int64_t(std::lround((o.x - x0) / spacing));
+        py = int64_t(std::lround((o.y - y0) / spacing));
         return px >= 0 && py >= 0 && px < nx && py < ny;
     };
-    // Opacity across one cell of cascade 0 (min_step: IsolationInput) against the footprint's threshold.
-    const float dense = -std::log(1.0f - std::min(float(s.footprint_opacity), 0.999f)) * float(R) * in.min_step;
+    const float dense =
+        float(occupancy_density_for_opacity(std::min(s.footprint_opacity, 0.999), 1.0, int(R), in.min_step));
     std::vector<uint8_t> marked(size_t(nx * ny), 0);
     bool any = false;
     for (int64_t z = 0; z < R; ++z)

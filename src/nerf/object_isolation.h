@@ -43,8 +43,7 @@ struct IsolationInput {
     Mat4 model_to_object;              // model space ([0,1]^3 cube, occupancy_view.h) -> object space (+Z up,
                                        // supporting plane z = 0)
     Vec3 box_min, box_max;             // the object's box in object space
-    // The march's smallest step in model units: the grid stores sigma x min_step (occupancy_grid.h), so the
-    // opacity across a cell of cascade c is 1 - exp(-density x 2^c / (resolution x min_step)).
+    // The march's smallest step in model units, for the opacity of a cell (occupancy_cell_opacity).
     float min_step = 0.0f;
 };
 

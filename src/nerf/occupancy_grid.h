@@ -2,6 +2,7 @@
 // the largest recent density estimate, decayed at every update, and an occupied flag derived from it.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -10,6 +11,16 @@
 #include "nerf/occupancy_view.h"
 
 namespace npt::nerf {
+
+// The grid stores sigma x min_step (OccupancyGrid::apply_update). Across one cell of a cascade whose cells are
+// cascade_size / resolution model units wide, that is an opacity of 1 - exp(-density x cascade_size /
+// (resolution x min_step)); the second function is its inverse.
+inline double occupancy_cell_opacity(double density, double cascade_size, int resolution, double min_step) {
+    return 1.0 - std::exp(-density * cascade_size / (double(resolution) * min_step));
+}
+inline double occupancy_density_for_opacity(double opacity, double cascade_size, int resolution, double min_step) {
+    return -std::log(1.0 - opacity) * double(resolution) * min_step / cascade_size;
+}
 
 // Number of cascades needed to cover instant-ngp's aabb of side aabb_scale: 1 + ceil(log2(aabb_scale)).
 int cascades_for_aabb_scale(float aabb_scale);

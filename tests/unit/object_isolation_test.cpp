@@ -165,9 +165,10 @@ TEST(ObjectIsolation, TheTableLayerKeepsOnlyTheObjectsFootprint) {
     for (size_t i = 0; i < d.size(); ++i) {
         const Vec3 p = centre_of(int64_t(i));
         if (in_cylinder(p)) EXPECT_GT(d[i], 0) << "cylinder cell " << i << " cut";
-        // Beyond the footprint's reach (1 cell of margin, half a cell for the marking cell's extent, half a
-        // cell of the footprint raster), no table is left.
-        if (in_table_layer(p) && axis_distance(p) > 0.1f + 2.0f * cell) EXPECT_EQ(d[i], 0) << "table cell " << i;
+        // Beyond the footprint's reach (1 cell of margin, half a cell for the marking cell's extent, and the
+        // footprint raster's rounding of both cells' centres, 2 x sqrt(2) / 4 = 0.71 cell at most), no table is
+        // left: 0.1 (the cylinder's outermost centres lie within it) + 2.25 cells.
+        if (in_table_layer(p) && axis_distance(p) > 0.1f + 2.25f * cell) EXPECT_EQ(d[i], 0) << "table cell " << i;
         cut += in_table_layer(p) && !in_cylinder(p) && in_box_columns(p) && d[i] == 0;
     }
     EXPECT_GT(cut, 100);
