@@ -62,3 +62,26 @@ for c in range(3):
     Pa[...,c]=P[...,c]*co[0]+co[1]
 pa=[psnr(srgb(Pa[k])[W[k]],srgb(G[k])[W[k]]) for k in range(3)]
 print('affine-corrected psnr %.2f'%np.mean(pa))
+# The albedo against the true normal (docs/benchmarks.md, "the albedo against the normal"): the low-frequency
+# ratio pred / truth (both blurred by 2 px inside the mask) by the normal's up component (world +z), and the PSNR
+# once a smooth function of the normal (log ratio fitted over 1, x, y, z and the quadratic terms) is divided out:
+# what a light whose vertical profile is right could give.
+N=np.stack([read(d+'normal_%d.exr'%k)[...,:3] for k in views])
+ratios=[]; ups=[]
+for k in range(3):
+    m=W[k].astype(np.float32); er=cv2.erode(W[k].astype(np.uint8),np.ones((7,7),np.uint8))>0
+    bl=lambda x: cv2.GaussianBlur(x*m[...,None],(0,0),2)/np.maximum(cv2.GaussianBlur(m,(0,0),2),1e-6)[...,None]
+    ratios.append((bl(Ps[k]).mean(-1)/np.maximum(bl(G[k]).mean(-1),1e-3))[er]); ups.append(N[k][...,2][er])
+ratio=np.concatenate(ratios); up=np.concatenate(ups)
+for lo in np.arange(-1,1,0.25):
+    sel=(up>=lo)&(up<lo+0.25)
+    if sel.sum()>50: print('normal z %+.2f..%+.2f: %6d px, albedo / truth (low frequency) %.3f'%(lo,lo+.25,sel.sum(),np.median(ratio[sel])))
+nx,ny,nz=N[...,0][W],N[...,1][W],N[...,2][W]
+X=np.stack([np.ones_like(nz),nx,ny,nz,nx*ny,nx*nz,ny*nz,nx*nx-ny*ny,3*nz*nz-1],-1)
+Pn=P.copy()
+for c in range(3):
+    lr=np.log(np.maximum(P[...,c][W],1e-3))-np.log(np.maximum(G[...,c][W],1e-3))
+    co=np.linalg.lstsq(X,lr,rcond=None)[0]
+    v=Pn[...,c]; v[W]=v[W]/np.exp(X@co-co[0]); Pn[...,c]=v
+sn=np.array([(Pn[...,c][W]*G[...,c][W]).sum()/(Pn[...,c][W]**2).sum() for c in range(3)])
+print('psnr with the normal-dependent part divided out %.2f'%np.mean([psnr(srgb(Pn[k]*sn)[W[k]],srgb(G[k])[W[k]]) for k in range(3)]))

@@ -238,8 +238,11 @@ void print_relight(const nerf::NerfModel& m) {
                r.config.hidden_layers, r.config.width, r.steps, r.seconds,
                r.config.diffuse == nerf::IntrinsicDiffuse::burley ? "Burley (Cycles v1)" : "layered");
     const nerf::CaptureEnvironment& env = r.capture_env;
-    Rgb mean(0.0f);
-    double total = 0, best = -1;
+    // Above and below the training world's horizon (+z up, as `poses` and NeRF-synthetic write it): the
+    // images constrain the light's vertical profile least, so it is worth seeing (docs/relighting.md).
+    const Mat4 model_to_world = m.world_to_model.inverse();
+    Rgb mean(0.0f), sky(0.0f), ground(0.0f);
+    double total = 0, best = -1, sky_w = 0, ground_w = 0;
     Vec3 best_dir(0.0f);
     for (int j = 0; j < env.height; ++j)
         for (int i = 0; i < env.width; ++i) {
@@ -247,6 +250,14 @@ void print_relight(const nerf::NerfModel& m) {
             const float w = nerf::env_texel_solid_angle(env.width, env.height, j);
             mean += t * w;
             total += w;
+            const Vec3 up_world = model_to_world.transform_vector(nerf::env_texel_direction(env.width, env.height, i, j));
+            if (up_world.z >= 0.0f) {
+                sky += t * w;
+                sky_w += w;
+            } else {
+                ground += t * w;
+                ground_w += w;
+            }
             const double lum = 0.2126 * t.x + 0.7152 * t.y + 0.0722 * t.z;
             if (lum > best) {
                 best = lum;
@@ -257,6 +268,9 @@ void print_relight(const nerf::NerfModel& m) {
     const Vec3 world_dir = normalize(m.world_to_model.inverse().transform_vector(best_dir));
     fmt::print("  capture light {}x{} environment, mean radiance {}, brightest toward {} (training world)\n",
                env.width, env.height, vec(mean), vec(world_dir));
+    if (sky_w > 0 && ground_w > 0)
+        fmt::print("  mean radiance above the horizon (training world +z) {}, below {}\n", vec(sky / float(sky_w)),
+                   vec(ground / float(ground_w)));
     if (!r.exposure.empty()) {
         float lo = INFINITY, hi = 0;
         for (const Rgb& e : r.exposure) {

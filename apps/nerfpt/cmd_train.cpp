@@ -133,6 +133,12 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "linearly, so a point's albedo follows the median of its views more than their mean (a "
                     "highlight the fit cannot explain moves it less). 0: squared error (default: 0)")
         ->check(CLI::Range(0.0f, 1.0f));
+    cmd->add_option("--relight-ground", args.relight.ground_share,
+                    fmt::format("The capture light below the horizon starts at this share of the sky above it "
+                                "(the ground reflects part of the sky's light); the images move it where they "
+                                "can (default: {})",
+                                args.relight.ground_share))
+        ->check(CLI::Range(0.001f, 1.0f));
     cmd->add_option("--relight-batch", args.relight.batch,
                     fmt::format("Surface points per optimiser step (default: {} on a GPU, {} on the CPU)",
                                 k_relight_batch_gpu, k_relight_batch_cpu))

@@ -60,6 +60,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ts.diffuse = options.diffuse;
     ts.roughness_prior = options.roughness_prior;
     ts.huber_delta = options.huber_delta;
+    ts.ground_share = options.ground_share;
     nerf::RelightTrainer trainer(model, data.cameras.size(), samples, ts);
     nerf::RelightStepStats st;
     while (trainer.steps_done() < options.steps) {

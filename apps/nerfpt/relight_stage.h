@@ -45,6 +45,7 @@ struct RelightStageOptions {
     nerf::IntrinsicDiffuse diffuse_lobe = nerf::IntrinsicConfig{}.diffuse;  // the BSDF the model is fitted for
     float roughness_prior = nerf::RelightTrainSettings{}.roughness_prior;
     float huber_delta = nerf::RelightTrainSettings{}.huber_delta;
+    float ground_share = nerf::RelightTrainSettings{}.ground_share;
     int borrowing_pixels = -1;  // -1: k_relight_pixels_* of the backend
     int pooled_neighbours = k_relight_pool;
     int table_log2 =

@@ -141,7 +141,14 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
     for (const Rgb& t : samples.target) mean += (t.x + t.y + t.z) / 3.0;
     mean /= double(samples.size());
     const float env0 = std::log(float(std::max(mean, 1e-3) / 0.5));
-    std::fill(m_params.begin() + m_env_offset, m_params.begin() + m_exposure_offset, env0);
+    const float ground = std::log(std::max(settings.ground_share, 1e-6f));
+    const Vec3 up = normalize(model.world_to_model.transform_vector(Vec3(0.0f, 0.0f, 1.0f)));
+    for (int j = 0; j < settings.env_height; ++j)
+        for (int i = 0; i < settings.env_width; ++i) {
+            const bool below = dot(env_texel_direction(settings.env_width, settings.env_height, i, j), up) < 0.0f;
+            float* texel = &m_params[m_env_offset + (size_t(j) * settings.env_width + size_t(i)) * 3];
+            std::fill_n(texel, 3, below ? env0 + ground : env0);
+        }
     m_adam =
         Adam(relight_optimizer(settings.learning_rate), m_total, m_layout.mlp_offset, m_layout.grid_offset);
 }

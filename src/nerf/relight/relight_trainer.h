@@ -45,6 +45,14 @@ struct RelightTrainSettings {
     float learning_rate = 1e-2f;
     float normal_weight = 0.3f;     // weight of |n_pred - n_density|^2 against the photometric loss
     float grey_weight = 1.0f;       // the grey-environment prior
+    // The environment's texels below the training world's horizon (+z up, as `poses` and NeRF-synthetic write
+    // it) start at this share of those above: the ground reflects part of the sky's light (a ground of albedo
+    // ~0.1, asphalt to grass). The images constrain the environment's vertical profile weakly (an up-facing
+    // surface's brighter albedo explains its pixels as well as a brighter sky), so where they leave it free the
+    // start stays: with a start as bright as the sky (1) dev's albedo came out ~18% too bright on up-facing
+    // surfaces against side-facing ones; 0.1 gave +0.5 dB of albedo on the CPU and on a GPU, 0.3 +0.3 / +0.4
+    // (docs/benchmarks.md, "the albedo against the normal").
+    float ground_share = 0.1f;
     float exposure_weight = 0.1f;   // pulls log exposures toward 0
     // Pulls each point's roughness toward 0.5: weight of (r - 0.5)^2 per point against the photometric loss.
     // A smooth capture light constrains the roughness little, and the fit, left free, used low roughness to
