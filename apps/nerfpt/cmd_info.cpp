@@ -250,8 +250,8 @@ void print_relight(const nerf::NerfModel& m) {
             const float w = nerf::env_texel_solid_angle(env.width, env.height, j);
             mean += t * w;
             total += w;
-            const Vec3 up_world = model_to_world.transform_vector(nerf::env_texel_direction(env.width, env.height, i, j));
-            if (up_world.z >= 0.0f) {
+            const Vec3 toward = model_to_world.transform_vector(nerf::env_texel_direction(env.width, env.height, i, j));
+            if (toward.z >= 0.0f) {
                 sky += t * w;
                 sky_w += w;
             } else {
@@ -265,7 +265,7 @@ void print_relight(const nerf::NerfModel& m) {
             }
         }
     mean = mean / float(total);
-    const Vec3 world_dir = normalize(m.world_to_model.inverse().transform_vector(best_dir));
+    const Vec3 world_dir = normalize(model_to_world.transform_vector(best_dir));
     fmt::print("  capture light {}x{} environment, mean radiance {}, brightest toward {} (training world)\n",
                env.width, env.height, vec(mean), vec(world_dir));
     if (sky_w > 0 && ground_w > 0)
