@@ -11,6 +11,7 @@
 #include "nerf/cuda/cuda_field.h"
 #include "nerf/cuda/cuda_renderer.h"
 #include "nerf/cuda/cuda_trainer.h"
+#include "nerf/cuda/cuda_wave_march.h"
 #endif
 
 namespace npt::nerf {
@@ -129,15 +130,24 @@ class GpuBakeField final : public bake::BakeField {
     cuda::CudaFieldEvaluator m_eval;
 };
 
+// fp32 (the CPU's per-point code): the relight stage's samples are the CPU backend's up to rounding.
 class GpuFieldQuery final : public FieldQuery {
   public:
-    explicit GpuFieldQuery(const NerfModel& model) : m_eval(model, cuda::Precision::fp32) {}
+    explicit GpuFieldQuery(const NerfModel& model) : m_model(model), m_eval(model, cuda::Precision::fp32) {}
     void evaluate(const Vec3* positions, const Vec3* dirs, size_t n, float* sigma, Rgb* rgb) override {
         m_eval.evaluate(positions, dirs, n, sigma, rgb);
     }
+    bool march(std::vector<WaveRay>& rays, WaveMode mode) override {
+        if (!m_marcher) m_marcher = std::make_unique<cuda::CudaWaveMarcher>(m_model, cuda::Precision::fp32);
+        m_marcher->march(rays, mode);
+        return true;
+    }
+    size_t batch_rays() const override { return size_t(1) << 20; }
 
   private:
+    const NerfModel& m_model;
     cuda::CudaFieldEvaluator m_eval;
+    std::unique_ptr<cuda::CudaWaveMarcher> m_marcher;  // made on the first march
 };
 #endif
 

@@ -5,9 +5,11 @@
 
 #include <cstddef>
 #include <memory>
+#include <vector>
 
 #include "core/vec.h"
 #include "nerf/nerf_model.h"
+#include "nerf/relight/wave_ray.h"
 
 namespace npt::nerf {
 
@@ -17,6 +19,15 @@ class FieldQuery {
     // sigma (per model unit) at n model-space points; with dirs (unit) also the colour (sigmoid outputs, the
     // stored sRGB-encoded values) into rgb; dirs null: density only, rgb untouched.
     virtual void evaluate(const Vec3* positions, const Vec3* dirs, size_t n, float* sigma, Rgb* rgb) = 0;
+    // The whole wavefront march of `rays` on the query's own device, with march_wavefront's arithmetic (its
+    // results, up to float rounding); false where the query cannot, and march_wavefront marches with evaluate().
+    virtual bool march(std::vector<WaveRay>& rays, WaveMode mode) {
+        (void)rays;
+        (void)mode;
+        return false;
+    }
+    // Rays a caller should hand march_wavefront per call: a GPU's march wants many more than a CPU round holds.
+    virtual size_t batch_rays() const { return k_wavefront_round_rays; }
 };
 
 // The model must outlive the query.

@@ -393,10 +393,10 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
     for (size_t j = 0; j < n; ++j)  // smoothing may turn a normal past the horizon of its own view
         if (dot(out.normal[j], out.wo[j]) < 0.0f) out.normal[j] = points[found[j]].normal;
     const float min_step = model.march_params().min_step;
-    // Whole points' directions, as many as one round of the marcher takes, so that a GPU evaluates its field in
-    // large batches (each call's rounds cost a few transfers and a synchronisation whatever their size). A ray's
-    // result does not depend on its batch.
-    const size_t points_per_round = std::max<size_t>(1, k_wavefront_round_rays / size_t(K));
+    // Whole points' directions, as many per call as the query asks for (a GPU marches a million rays at once;
+    // each call's rounds cost a few transfers and a synchronisation whatever their size). A ray's result does not
+    // depend on its batch.
+    const size_t points_per_round = std::max<size_t>(1, query.batch_rays() / size_t(K));
     for (size_t begin = 0; begin < n; begin += points_per_round) {
         const size_t end = std::min(n, begin + points_per_round);
         std::vector<WaveRay> rays((end - begin) * K);

@@ -12,12 +12,13 @@ namespace npt::nerf {
 
 namespace {
 
-constexpr int k_round_samples = 32;               // samples a live ray takes per round
-constexpr float k_log_stop = -9.2103404f;         // ln(1e-4), as the renderer
+constexpr int k_round_samples = 32;  // samples a live ray takes per round
+constexpr float k_log_stop = k_wave_log_stop;
 
 }  // namespace
 
 void march_wavefront(const NerfModel& model, FieldQuery& query, std::vector<WaveRay>& rays, WaveMode mode) {
+    if (query.march(rays, mode)) return;
     const MarchParams mp = model.march_params();
     const OccupancyGridView grid = model.occupancy.view();
     const bool color = mode == WaveMode::radiance;

@@ -1,0 +1,36 @@
+// A ray of the relight stage's wavefront march (wavefront_march.h) and what it asks for: plain data, so that a
+// GPU marches an array of them as the CPU does (nerf/cuda/cuda_wave_march.h).
+#pragma once
+
+#include <cstddef>
+
+#include "core/vec.h"
+
+namespace npt::nerf {
+
+enum class WaveMode {
+    radiance,  // transmittance and the emitted colour (linear), as a camera ray of the emissive renderer
+    event,     // where the optical depth first reaches tau_target (the scattering event of a relit path)
+    depth,     // transmittance and the weighted distance (density only: no colour is evaluated)
+};
+
+struct WaveRay {
+    Ray ray;              // model space, unit direction
+    float jitter = 0.5f;  // lattice offset in [0, 1)
+    float tau_target = 0.0f;  // WaveMode::event
+    // Results.
+    float transmittance = 1.0f;  // 0 once below 1e-4
+    Rgb radiance{0.0f};
+    float depth = 0.0f;  // radiance and depth modes: sum of the volume weights times the distance along the ray
+    bool has_event = false;
+    Vec3 event_position{0.0f};
+};
+
+// A ray's march ends once its transmittance falls below this (ln 1e-4), as the renderer's.
+constexpr float k_wave_log_stop = -9.2103404f;
+
+// Live rays in one round of the CPU's march at most (bounds a round's buffers, ~120 MB); callers batch this
+// many rays per call unless the query asks for more (FieldQuery::batch_rays).
+constexpr size_t k_wavefront_round_rays = size_t(1) << 17;
+
+}  // namespace npt::nerf
