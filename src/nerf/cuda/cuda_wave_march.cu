@@ -6,7 +6,6 @@
 #include "core/cuda/device_buffer.h"
 #include "core/cuda/warp_lists.cuh"
 #include "core/error.h"
-#include "core/srgb.h"
 #include "nerf/cuda/adam_kernels.h"
 #include "nerf/cuda/cuda_device.h"
 #include "nerf/cuda/fused_mlp.h"
@@ -82,7 +81,7 @@ __global__ void __launch_bounds__(k_block) field_fp32_kernel(NerfFieldView field
     }
 }
 
-// march_wavefront's step 3, sample by sample; rays that go on are appended to next.
+// march_wavefront's step 3, sample by sample (wave_composite); rays that go on are appended to next.
 __global__ void __launch_bounds__(k_block) composite_kernel(WaveRay* rays, WaveState* state, const uint32_t* alive,
                                                              uint32_t n, WaveMode mode, MarchParams mp,
                                                              RenderSlots slots, const float* sigma, const Rgb* rgb,
@@ -100,25 +99,8 @@ __global__ void __launch_bounds__(k_block) composite_kernel(WaveRay* rays, WaveS
         const int used = slots.used[a];
         for (int k = 0; k < used && !stop; ++k) {
             const uint32_t q = base + uint32_t(k);
-            const float d = sigma[q] * slots.dt[q];
-            if (!(d > 0.0f)) continue;
-            if (mode == WaveMode::event) {
-                tt += d;
-                if (tt >= r.tau_target) {
-                    r.has_event = true;
-                    r.event_position = slots.pos[q];
-                    stop = true;
-                }
-            } else {
-                const float w = expf(lt) * -expm1f(-d);
-                if (mode == WaveMode::radiance) {
-                    const Rgb c = rgb[q];
-                    r.radiance += Rgb(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z)) * w;
-                }
-                r.depth += w * dot(slots.pos[q] - r.ray.o, r.ray.d);
-                lt -= d;
-                stop = lt < k_wave_log_stop;
-            }
+            stop = wave_composite(mode, r, lt, tt, slots.pos[q], sigma[q] * slots.dt[q],
+                                  mode == WaveMode::radiance ? rgb[q] : Rgb(0.0f));
         }
         s.log_t = lt;
         s.tau = tt;
@@ -131,8 +113,7 @@ __global__ void __launch_bounds__(k_block) finish_kernel(WaveRay* rays, const Wa
                                                           WaveMode mode) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i >= n) return;
-    const WaveState& s = state[i];
-    rays[i].transmittance = mode == WaveMode::event ? expf(-s.tau) : (s.log_t < k_wave_log_stop ? 0.0f : expf(s.log_t));
+    rays[i].transmittance = wave_transmittance(mode, state[i].log_t, state[i].tau);
 }
 
 }  // namespace

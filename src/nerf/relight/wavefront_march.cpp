@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/srgb.h"
 #include "nerf/ray_march.h"
 
 namespace npt::nerf {
@@ -13,7 +12,6 @@ namespace npt::nerf {
 namespace {
 
 constexpr int k_round_samples = 32;  // samples a live ray takes per round
-constexpr float k_log_stop = k_wave_log_stop;
 
 }  // namespace
 
@@ -80,25 +78,8 @@ void march_wavefront(const NerfModel& model, FieldQuery& query, std::vector<Wave
             bool stop = false;
             for (int k = 0; k < count[a] && !stop; ++k) {
                 const size_t s = first[a] + size_t(k);
-                const float d = sigma[s] * dt[a * k_round_samples + k];
-                if (!(d > 0.0f)) continue;
-                if (mode == WaveMode::event) {
-                    tt += d;
-                    if (tt >= r.tau_target) {
-                        r.has_event = true;
-                        r.event_position = pos[s];
-                        stop = true;
-                    }
-                } else {
-                    const float w = std::exp(lt) * -std::expm1(-d);
-                    if (color) {
-                        const Rgb c(srgb_to_linear(rgb[s].x), srgb_to_linear(rgb[s].y), srgb_to_linear(rgb[s].z));
-                        r.radiance += c * w;
-                    }
-                    r.depth += w * dot(pos[s] - r.ray.o, r.ray.d);
-                    lt -= d;
-                    stop = lt < k_log_stop;
-                }
+                stop = wave_composite(mode, r, lt, tt, pos[s], sigma[s] * dt[a * k_round_samples + k],
+                                      color ? rgb[s] : Rgb(0.0f));
             }
             log_t[i] = lt;
             tau[i] = tt;
@@ -111,9 +92,7 @@ void march_wavefront(const NerfModel& model, FieldQuery& query, std::vector<Wave
         next.insert(next.end(), live.begin() + n_live, live.end());
         live.swap(next);
     }
-    for (size_t i = 0; i < rays.size(); ++i)
-        rays[i].transmittance = mode == WaveMode::event ? std::exp(-tau[i])
-                                                        : (log_t[i] < k_log_stop ? 0.0f : std::exp(log_t[i]));
+    for (size_t i = 0; i < rays.size(); ++i) rays[i].transmittance = wave_transmittance(mode, log_t[i], tau[i]);
 }
 
 }  // namespace npt::nerf
