@@ -1,8 +1,8 @@
 // The relight stage's wavefront march on the GPU (FieldQuery::march of the CUDA query: rounds, fp32 field and
-// compositing on the device) against the CPU's march (march_wavefront with the CPU query), in all three modes, on
-// a model with random weights. The two run the same per-point code in fp32; they differ by float rounding only
-// (fused multiply-adds), so transmittances and colours agree to ~1e-5 and an event lands on another sample only
-// where the optical depth passes its target within that rounding.
+// compositing on the device) against the CPU's march (march_wavefront with the CPU query), in all three
+// modes, on a model with random weights. The two run the same per-point code in fp32; they differ by float
+// rounding only (fused multiply-adds), so transmittances and colours agree to ~1e-5 and an event lands on
+// another sample only where the optical depth passes its target within that rounding.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,5 +1,3 @@
-#include "nerf/cuda/cuda_wave_march.h"
-
 #include <algorithm>
 #include <string>
 
@@ -8,6 +6,7 @@
 #include "core/error.h"
 #include "nerf/cuda/adam_kernels.h"
 #include "nerf/cuda/cuda_device.h"
+#include "nerf/cuda/cuda_wave_march.h"
 #include "nerf/cuda/fused_mlp.h"
 #include "nerf/cuda/march_slots.cuh"
 #include "nerf/cuda/occupancy_bits.h"
@@ -21,8 +20,9 @@ using gpu::DeviceBuffer;
 namespace {
 
 constexpr int k_block = 128;
-constexpr uint32_t k_min_slots = 1u << 22;  // samples evaluated per round at most (more where there are more rays)
-constexpr int k_first_round = 8;            // samples per live ray in the first round; doubles every round
+constexpr uint32_t k_min_slots =
+    1u << 22;                     // samples evaluated per round at most (more where there are more rays)
+constexpr int k_first_round = 8;  // samples per live ray in the first round; doubles every round
 constexpr int k_max_round = 64;
 
 // A ray's march between rounds.
@@ -34,9 +34,9 @@ struct WaveState {
 
 unsigned blocks_for(uint32_t n) { return (n + k_block - 1) / k_block; }
 
-__global__ void __launch_bounds__(k_block) init_kernel(WaveRay* rays, uint32_t n, MarchParams mp,
-                                                        OccupancyGridView grid, WaveState* state, Vec3* dirs,
-                                                        uint32_t* alive, uint32_t* alive_count) {
+__global__ void __launch_bounds__(k_block)
+    init_kernel(WaveRay* rays, uint32_t n, MarchParams mp, OccupancyGridView grid, WaveState* state,
+                Vec3* dirs, uint32_t* alive, uint32_t* alive_count) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     bool live = false;
     if (i < n) {
@@ -53,9 +53,9 @@ __global__ void __launch_bounds__(k_block) init_kernel(WaveRay* rays, uint32_t n
     gpu::warp_append(live, i, alive, alive_count);
 }
 
-__global__ void __launch_bounds__(k_block) march_kernel(const WaveRay* rays, WaveState* state, const uint32_t* alive,
-                                                         uint32_t n, int k, MarchParams mp, OccupancyGridView grid,
-                                                         RenderSlots slots) {
+__global__ void __launch_bounds__(k_block)
+    march_kernel(const WaveRay* rays, WaveState* state, const uint32_t* alive, uint32_t n, int k,
+                 MarchParams mp, OccupancyGridView grid, RenderSlots slots) {
     const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
     const bool live = a < n;
     const uint32_t i = live ? alive[a] : 0u;
@@ -70,8 +70,9 @@ __global__ void __launch_bounds__(k_block) march_kernel(const WaveRay* rays, Wav
 }
 
 // The fp32 per-point field (the CPU's code), the colour only where it is wanted.
-__global__ void __launch_bounds__(k_block) field_fp32_kernel(NerfFieldView field, RenderSlots slots,
-                                                              const Vec3* dirs, bool color, float* sigma, Rgb* rgb) {
+__global__ void __launch_bounds__(k_block)
+    field_fp32_kernel(NerfFieldView field, RenderSlots slots, const Vec3* dirs, bool color, float* sigma,
+                      Rgb* rgb) {
     const uint32_t m = *slots.count;
     for (uint32_t i = blockIdx.x * blockDim.x + threadIdx.x; i < m; i += gridDim.x * blockDim.x) {
         if (color)
@@ -82,10 +83,10 @@ __global__ void __launch_bounds__(k_block) field_fp32_kernel(NerfFieldView field
 }
 
 // march_wavefront's step 3, sample by sample (wave_composite); rays that go on are appended to next.
-__global__ void __launch_bounds__(k_block) composite_kernel(WaveRay* rays, WaveState* state, const uint32_t* alive,
-                                                             uint32_t n, WaveMode mode, MarchParams mp,
-                                                             RenderSlots slots, const float* sigma, const Rgb* rgb,
-                                                             uint32_t* next, uint32_t* next_count) {
+__global__ void __launch_bounds__(k_block)
+    composite_kernel(WaveRay* rays, WaveState* state, const uint32_t* alive, uint32_t n, WaveMode mode,
+                     MarchParams mp, RenderSlots slots, const float* sigma, const Rgb* rgb, uint32_t* next,
+                     uint32_t* next_count) {
     const uint32_t a = blockIdx.x * blockDim.x + threadIdx.x;
     bool go_on = false;
     uint32_t i = 0;
@@ -109,8 +110,8 @@ __global__ void __launch_bounds__(k_block) composite_kernel(WaveRay* rays, WaveS
     gpu::warp_append(go_on, i, next, next_count);
 }
 
-__global__ void __launch_bounds__(k_block) finish_kernel(WaveRay* rays, const WaveState* state, uint32_t n,
-                                                          WaveMode mode) {
+__global__ void __launch_bounds__(k_block)
+    finish_kernel(WaveRay* rays, const WaveState* state, uint32_t n, WaveMode mode) {
     const uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i >= n) return;
     rays[i].transmittance = wave_transmittance(mode, state[i].log_t, state[i].tau);
@@ -176,8 +177,9 @@ void CudaWaveMarcher::Impl::reserve(size_t n) {
 }
 
 uint32_t CudaWaveMarcher::Impl::read_count(int which) {
-    cuda_check(cudaMemcpyAsync(host_count, counts.data() + which, sizeof(uint32_t), cudaMemcpyDeviceToHost, stream),
-               "cudaMemcpyAsync");
+    cuda_check(
+        cudaMemcpyAsync(host_count, counts.data() + which, sizeof(uint32_t), cudaMemcpyDeviceToHost, stream),
+        "cudaMemcpyAsync");
     cuda_check(cudaStreamSynchronize(stream), "the relight stage's march");
     return *host_count;
 }
@@ -215,17 +217,18 @@ void CudaWaveMarcher::march(std::vector<WaveRay>& host_rays, WaveMode mode) {
     Impl& I = *m;
     const size_t total = host_rays.size();
     if (total == 0) return;
-    if (total >= (size_t(1) << 31)) throw Error("relight: too many rays in one march (" + std::to_string(total) + ")");
+    if (total >= (size_t(1) << 31))
+        throw Error("relight: too many rays in one march (" + std::to_string(total) + ")");
     I.reserve(total);
     const uint32_t n = uint32_t(total);
-    cuda_check(cudaMemcpyAsync(I.rays.data(), host_rays.data(), total * sizeof(WaveRay), cudaMemcpyHostToDevice,
-                               I.stream),
+    cuda_check(cudaMemcpyAsync(I.rays.data(), host_rays.data(), total * sizeof(WaveRay),
+                               cudaMemcpyHostToDevice, I.stream),
                "cudaMemcpyAsync");
-    RenderSlots slots{I.slot_pos.data(), I.slot_dt.data(), I.slot_owner.data(), I.slot_first.data(),
+    RenderSlots slots{I.slot_pos.data(),  I.slot_dt.data(),    I.slot_owner.data(),  I.slot_first.data(),
                       I.slot_used.data(), I.counts.data() + 2, I.slot_scratch.data()};
     cuda_check(cudaMemsetAsync(I.counts.data(), 0, 3 * sizeof(uint32_t), I.stream), "cudaMemsetAsync");
     init_kernel<<<blocks_for(n), k_block, 0, I.stream>>>(I.rays.data(), n, I.march, I.grid, I.state.data(),
-                                                          I.dirs.data(), I.alive[0].data(), I.counts.data());
+                                                         I.dirs.data(), I.alive[0].data(), I.counts.data());
     NPT_CUDA_CHECK_LAUNCH("wave init_kernel");
     uint32_t live = I.read_count(0);
     int cur = 0;
@@ -235,8 +238,8 @@ void CudaWaveMarcher::march(std::vector<WaveRay>& host_rays, WaveMode mode) {
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / live)));
         const uint32_t most = live * uint32_t(kk);
         cuda_check(cudaMemsetAsync(slots.count, 0, sizeof(uint32_t), I.stream), "cudaMemsetAsync");
-        march_kernel<<<blocks_for(live), k_block, 0, I.stream>>>(I.rays.data(), I.state.data(), I.alive[cur].data(),
-                                                                  live, kk, I.march, I.grid, slots);
+        march_kernel<<<blocks_for(live), k_block, 0, I.stream>>>(
+            I.rays.data(), I.state.data(), I.alive[cur].data(), live, kk, I.march, I.grid, slots);
         NPT_CUDA_CHECK_LAUNCH("wave march_kernel");
         if (I.precision == Precision::fp32) {
             const NerfFieldView field(I.layout, I.params.data());
@@ -245,25 +248,25 @@ void CudaWaveMarcher::march(std::vector<WaveRay>& host_rays, WaveMode mode) {
             NPT_CUDA_CHECK_LAUNCH("wave field_fp32_kernel");
         } else if (color) {
             render_field_fp16(I.layout, I.params.data(), I.mlp_half.data(), slots, I.dirs.data(),
-                              field_rows(most, capacity), I.slot_enc.data(), I.slot_sigma.data(), I.slot_rgb.data(),
-                              I.stream);
+                              field_rows(most, capacity), I.slot_enc.data(), I.slot_sigma.data(),
+                              I.slot_rgb.data(), I.stream);
         } else {
-            render_density_fp16(I.layout, I.params.data(), I.mlp_half.data(), slots, field_rows(most, capacity),
-                                I.slot_enc.data(), I.slot_sigma.data(), I.stream);
+            render_density_fp16(I.layout, I.params.data(), I.mlp_half.data(), slots,
+                                field_rows(most, capacity), I.slot_enc.data(), I.slot_sigma.data(), I.stream);
         }
         const int nxt = 1 - cur;
         cuda_check(cudaMemsetAsync(I.counts.data() + nxt, 0, sizeof(uint32_t), I.stream), "cudaMemsetAsync");
         composite_kernel<<<blocks_for(live), k_block, 0, I.stream>>>(
-            I.rays.data(), I.state.data(), I.alive[cur].data(), live, mode, I.march, slots, I.slot_sigma.data(),
-            I.slot_rgb.data(), I.alive[nxt].data(), I.counts.data() + nxt);
+            I.rays.data(), I.state.data(), I.alive[cur].data(), live, mode, I.march, slots,
+            I.slot_sigma.data(), I.slot_rgb.data(), I.alive[nxt].data(), I.counts.data() + nxt);
         NPT_CUDA_CHECK_LAUNCH("wave composite_kernel");
         live = I.read_count(nxt);
         cur = nxt;
     }
     finish_kernel<<<blocks_for(n), k_block, 0, I.stream>>>(I.rays.data(), I.state.data(), n, mode);
     NPT_CUDA_CHECK_LAUNCH("wave finish_kernel");
-    cuda_check(cudaMemcpyAsync(host_rays.data(), I.rays.data(), total * sizeof(WaveRay), cudaMemcpyDeviceToHost,
-                               I.stream),
+    cuda_check(cudaMemcpyAsync(host_rays.data(), I.rays.data(), total * sizeof(WaveRay),
+                               cudaMemcpyDeviceToHost, I.stream),
                "cudaMemcpyAsync");
     cuda_check(cudaStreamSynchronize(I.stream), "the relight stage's march");
 }

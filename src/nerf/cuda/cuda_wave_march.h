@@ -1,8 +1,8 @@
-// The relight stage's wavefront march (nerf/relight/wavefront_march.h) done wholly on the GPU: the rays' state
-// stays on the device, each round marches every live ray a few samples (the view renderer's march_into_slots),
-// evaluates them in one launch and composites them by march_wavefront's arithmetic, so that the host's CPU cores
-// (which limited the stage on some machines) do nothing but wait. The results equal the CPU's march up to float
-// rounding.
+// The relight stage's wavefront march (nerf/relight/wavefront_march.h) done wholly on the GPU: the rays'
+// state stays on the device, each round marches every live ray a few samples (the view renderer's
+// march_into_slots), evaluates them in one launch and composites them by march_wavefront's arithmetic, so
+// that the host's CPU cores (which limited the stage on some machines) do nothing but wait. The results equal
+// the CPU's march up to float rounding.
 #pragma once
 
 #include <memory>

@@ -1,5 +1,5 @@
-// A ray of the relight stage's wavefront march (wavefront_march.h) and what it asks for: plain data, so that a
-// GPU marches an array of them as the CPU does (nerf/cuda/cuda_wave_march.h).
+// A ray of the relight stage's wavefront march (wavefront_march.h) and what it asks for: plain data, so that
+// a GPU marches an array of them as the CPU does (nerf/cuda/cuda_wave_march.h).
 #pragma once
 
 #include <math.h>
@@ -19,13 +19,14 @@ enum class WaveMode {
 };
 
 struct WaveRay {
-    Ray ray;              // model space, unit direction
-    float jitter = 0.5f;  // lattice offset in [0, 1)
+    Ray ray;                  // model space, unit direction
+    float jitter = 0.5f;      // lattice offset in [0, 1)
     float tau_target = 0.0f;  // WaveMode::event
     // Results.
     float transmittance = 1.0f;  // 0 once below 1e-4
     Rgb radiance{0.0f};
-    float depth = 0.0f;  // radiance and depth modes: sum of the volume weights times the distance along the ray
+    // Radiance and depth modes: the sum of the volume weights times the distance along the ray.
+    float depth = 0.0f;
     bool has_event = false;
     Vec3 event_position{0.0f};
 };
@@ -33,11 +34,12 @@ struct WaveRay {
 // A ray's march ends once its transmittance falls below this (ln 1e-4), as the renderer's.
 constexpr float k_wave_log_stop = -9.2103404f;
 
-// One sample of a ray's march composited into it, front to back (march_wavefront's arithmetic on either device):
-// `pos` the sample, `d` its optical depth (sigma dt), `rgb` its stored colour (sRGB-encoded; read in radiance
-// mode only); log_t and tau carry the ray's log transmittance and optical depth between samples. True where the
-// ray ends at this sample: its event, or opaque.
-NPT_HD inline bool wave_composite(WaveMode mode, WaveRay& r, float& log_t, float& tau, Vec3 pos, float d, Rgb rgb) {
+// One sample of a ray's march composited into it, front to back (march_wavefront's arithmetic on either
+// device): `pos` the sample, `d` its optical depth (sigma dt), `rgb` its stored colour (sRGB-encoded; read in
+// radiance mode only); log_t and tau carry the ray's log transmittance and optical depth between samples.
+// True where the ray ends at this sample: its event, or opaque.
+NPT_HD inline bool wave_composite(WaveMode mode, WaveRay& r, float& log_t, float& tau, Vec3 pos, float d,
+                                  Rgb rgb) {
     if (!(d > 0.0f)) return false;
     if (mode == WaveMode::event) {
         tau += d;
@@ -47,7 +49,8 @@ NPT_HD inline bool wave_composite(WaveMode mode, WaveRay& r, float& log_t, float
         return true;
     }
     const float w = expf(log_t) * -expm1f(-d);
-    if (mode == WaveMode::radiance) r.radiance += Rgb(srgb_to_linear(rgb.x), srgb_to_linear(rgb.y), srgb_to_linear(rgb.z)) * w;
+    if (mode == WaveMode::radiance)
+        r.radiance += Rgb(srgb_to_linear(rgb.x), srgb_to_linear(rgb.y), srgb_to_linear(rgb.z)) * w;
     r.depth += w * dot(pos - r.ray.o, r.ray.d);
     log_t -= d;
     return log_t < k_wave_log_stop;
