@@ -4,7 +4,8 @@
 # --relightable on the GPU (TRAIN_SECONDS of NeRF training, default 60, then the relight stage), its intrinsic
 # fields on the 20 test views (bench/relight_fields) and the relight scorer on them; with RELIT=1 also the 20
 # views relit under `sunset` and `studio` and the room scene (bench/relight_dev.sh); then the GPU tests named by
-# GTEST_FILTER, if any. Logs and small pictures in $OUT.
+# GTEST_FILTER, if any (gtest's syntax: parameterised suites carry a prefix, so `*RelightMarchGpu*`, not
+# `RelightMarchGpu*`). Logs and small pictures in $OUT.
 # ESTIMATORS=1 also scores the surface-normal estimators the stage can fit to (relight_fields --normals density |
 # depth, at a few steps / stencil widths) on the trained NeRF. VARIANTS="name:ARGS;name:ARGS" re-runs the relight
 # stage alone on copies of the trained model with extra `nerfpt train` ARGS (e.g. --relight-normals density) and
