@@ -138,7 +138,7 @@ class GpuFieldQuery final : public FieldQuery {
         m_eval.evaluate(positions, dirs, n, sigma, rgb);
     }
     bool march(std::vector<WaveRay>& rays, WaveMode mode) override {
-        if (!m_marcher) m_marcher = std::make_unique<cuda::CudaWaveMarcher>(m_model, cuda::Precision::fp32);
+        if (!m_marcher) m_marcher = std::make_unique<cuda::CudaWaveMarcher>(m_model);
         m_marcher->march(rays, mode);
         return true;
     }

@@ -4,10 +4,8 @@
 #include "core/cuda/device_buffer.h"
 #include "core/cuda/warp_lists.cuh"
 #include "core/error.h"
-#include "nerf/cuda/adam_kernels.h"
 #include "nerf/cuda/cuda_device.h"
 #include "nerf/cuda/cuda_wave_march.h"
-#include "nerf/cuda/fused_mlp.h"
 #include "nerf/cuda/march_slots.cuh"
 #include "nerf/cuda/occupancy_bits.h"
 #include "nerf/cuda/render_kernels.h"
@@ -20,8 +18,9 @@ using gpu::DeviceBuffer;
 namespace {
 
 constexpr int k_block = 128;
-constexpr uint32_t k_min_slots =
-    1u << 22;                     // samples evaluated per round at most (more where there are more rays)
+// Sample slots of a round: a round evaluates at most this many samples (more where more rays are live, one
+// slot each at least).
+constexpr uint32_t k_min_slots = 1u << 22;
 constexpr int k_first_round = 8;  // samples per live ray in the first round; doubles every round
 constexpr int k_max_round = 64;
 
@@ -120,12 +119,10 @@ __global__ void __launch_bounds__(k_block)
 }  // namespace
 
 struct CudaWaveMarcher::Impl {
-    Precision precision = Precision::fp32;
     NerfLayout layout;
     MarchParams march;
     cudaStream_t stream = nullptr;
     DeviceBuffer<float> params;
-    DeviceBuffer<__half> mlp_half;
     DeviceBuffer<uint32_t> occupied, coarse, counts;
     OccupancyGridView grid;
     // Per ray (grown to the largest call).
@@ -140,7 +137,6 @@ struct CudaWaveMarcher::Impl {
     DeviceBuffer<uint8_t> slot_used;
     DeviceBuffer<float4> slot_scratch;
     DeviceBuffer<Rgb> slot_rgb;
-    DeviceBuffer<__half> slot_enc;
     uint32_t* host_count = nullptr;
 
     ~Impl() {
@@ -172,7 +168,6 @@ void CudaWaveMarcher::Impl::reserve(size_t n) {
         slot_used.allocate(slots, what, lower);
         slot_scratch.allocate(slots, what, lower);
         slot_rgb.allocate(slots, what, lower);
-        if (precision == Precision::fp16) slot_enc.allocate(slots * k_mlp_inputs, what, lower);
     }
 }
 
@@ -184,23 +179,14 @@ uint32_t CudaWaveMarcher::Impl::read_count(int which) {
     return *host_count;
 }
 
-CudaWaveMarcher::CudaWaveMarcher(const NerfModel& model, Precision precision) : m(std::make_unique<Impl>()) {
+CudaWaveMarcher::CudaWaveMarcher(const NerfModel& model) : m(std::make_unique<Impl>()) {
     Impl& I = *m;
     require_cuda_device();
-    I.precision = precision;
     I.layout = model.layout();
     if (model.params.size() != I.layout.total) throw Error("the model's parameters do not match its layout");
-    std::string why;
-    if (precision == Precision::fp16 && !mlp_shape_supported(I.layout, &why))
-        throw Error("the fp16 field kernels do not support this model's network (" + why + ")");
     I.march = model.march_params();
     cuda_check(cudaStreamCreate(&I.stream), "cudaStreamCreate");
     I.params.upload(model.params, "the model parameters", "encoding.log2_table_size");
-    if (precision == Precision::fp16) {
-        I.mlp_half.allocate(k_mlp_half_weights);
-        cuda_check(cudaMemsetAsync(I.mlp_half.data(), 0, I.mlp_half.bytes(), I.stream), "cudaMemsetAsync");
-        to_half(I.params.data(), uint32_t(k_mlp_param_count), I.mlp_half.data(), I.stream);
-    }
     const OccupancyBits bits = occupancy_bits(model.occupancy.view());
     I.occupied.upload(bits.occupied, "the occupancy grid", "occupancy.resolution");
     if (!bits.coarse.empty()) I.coarse.upload(bits.coarse, "the occupancy grid", "occupancy.resolution");
@@ -241,19 +227,10 @@ void CudaWaveMarcher::march(std::vector<WaveRay>& host_rays, WaveMode mode) {
         march_kernel<<<blocks_for(live), k_block, 0, I.stream>>>(
             I.rays.data(), I.state.data(), I.alive[cur].data(), live, kk, I.march, I.grid, slots);
         NPT_CUDA_CHECK_LAUNCH("wave march_kernel");
-        if (I.precision == Precision::fp32) {
-            const NerfFieldView field(I.layout, I.params.data());
-            field_fp32_kernel<<<std::min(blocks_for(most), 132u * 16u), k_block, 0, I.stream>>>(
-                field, slots, I.dirs.data(), color, I.slot_sigma.data(), I.slot_rgb.data());
-            NPT_CUDA_CHECK_LAUNCH("wave field_fp32_kernel");
-        } else if (color) {
-            render_field_fp16(I.layout, I.params.data(), I.mlp_half.data(), slots, I.dirs.data(),
-                              field_rows(most, capacity), I.slot_enc.data(), I.slot_sigma.data(),
-                              I.slot_rgb.data(), I.stream);
-        } else {
-            render_density_fp16(I.layout, I.params.data(), I.mlp_half.data(), slots,
-                                field_rows(most, capacity), I.slot_enc.data(), I.slot_sigma.data(), I.stream);
-        }
+        const NerfFieldView field(I.layout, I.params.data());
+        field_fp32_kernel<<<std::min(blocks_for(most), 132u * 16u), k_block, 0, I.stream>>>(
+            field, slots, I.dirs.data(), color, I.slot_sigma.data(), I.slot_rgb.data());
+        NPT_CUDA_CHECK_LAUNCH("wave field_fp32_kernel");
         const int nxt = 1 - cur;
         cuda_check(cudaMemsetAsync(I.counts.data() + nxt, 0, sizeof(uint32_t), I.stream), "cudaMemsetAsync");
         composite_kernel<<<blocks_for(live), k_block, 0, I.stream>>>(

@@ -8,7 +8,6 @@
 #include <memory>
 #include <vector>
 
-#include "nerf/cuda/cuda_renderer.h"
 #include "nerf/nerf_model.h"
 #include "nerf/relight/wave_ray.h"
 
@@ -16,9 +15,10 @@ namespace npt::nerf::cuda {
 
 class CudaWaveMarcher {
   public:
-    // Uploads the model's parameters and occupancy grid. Throws npt::Error when no GPU can be used, or for
-    // Precision::fp16 when the network's shape is not supported by the tensor-core kernels.
-    CudaWaveMarcher(const NerfModel& model, Precision precision);
+    // Uploads the model's parameters and occupancy grid. Throws npt::Error when no GPU can be used. The field
+    // is evaluated in fp32 by the CPU's per-point code (NerfFieldView), so that the relight stage's samples
+    // are the CPU backend's up to rounding.
+    explicit CudaWaveMarcher(const NerfModel& model);
     ~CudaWaveMarcher();
     CudaWaveMarcher(const CudaWaveMarcher&) = delete;
     CudaWaveMarcher& operator=(const CudaWaveMarcher&) = delete;
