@@ -12,6 +12,7 @@
 #include "nerf/cuda/fused_mlp.h"
 #include "nerf/cuda/occupancy_bits.h"
 #include "nerf/cuda/render_kernels.h"
+#include "nerf/cuda/sample_slots.h"
 
 namespace npt::nerf::cuda {
 
@@ -19,8 +20,8 @@ using gpu::cuda_check;
 using gpu::DeviceBuffer;
 
 namespace {
-constexpr uint32_t k_max_slots = 1u << 22;   // samples evaluated per round at most
-constexpr int k_first_round = 8;             // samples per live ray in the first round; doubles every round
+constexpr uint32_t k_max_slots = 1u << 22;  // samples evaluated per round at most
+constexpr int k_first_round = 8;            // samples per live ray in the first round; doubles every round
 constexpr int k_max_round = 64;
 }  // namespace
 
@@ -42,14 +43,7 @@ struct CudaViewRenderer::Impl {
     DeviceBuffer<float4> image;
     DeviceBuffer<uint32_t> alive[2], counts;
     // Per round.
-    DeviceBuffer<Vec3> slot_pos;
-    DeviceBuffer<float> slot_dt, slot_sigma;
-    DeviceBuffer<uint32_t> slot_pixel;
-    DeviceBuffer<uint8_t> slot_used;
-    DeviceBuffer<uint32_t> slot_first;
-    DeviceBuffer<float4> slot_scratch;
-    DeviceBuffer<Rgb> slot_rgb;
-    DeviceBuffer<__half> slot_enc;
+    SampleSlotBuffers slots;
     uint32_t* host_count = nullptr;
 
     Impl(const NerfModel& m, Precision p) : model(m), precision(p) {}
@@ -71,25 +65,17 @@ void CudaViewRenderer::Impl::resize(int w, int h) {
     alive[0].allocate(n, "the per-pixel ray state", "--res");
     alive[1].allocate(n, "the per-pixel ray state", "--res");
     // At least one sample slot per pixel, so that every live ray takes part in every round.
-    const size_t slots = std::max<size_t>(k_max_slots, (n + 127) / 128 * 128);
-    if (slots != slot_pos.size()) {
-        slot_pos.allocate(slots, "the sample slots", "--res");
-        slot_dt.allocate(slots, "the sample slots", "--res");
-        slot_sigma.allocate(slots, "the sample slots", "--res");
-        slot_pixel.allocate(slots, "the sample slots", "--res");
-        slot_used.allocate(slots, "the sample slots", "--res");
-        slot_first.allocate(slots, "the sample slots", "--res");
-        slot_scratch.allocate(slots, "the sample slots", "--res");
-        slot_rgb.allocate(slots, "the sample slots", "--res");
-        if (precision == Precision::fp16) slot_enc.allocate(slots * k_mlp_inputs, "the sample slots", "--res");
-    }
+    const size_t capacity = std::max<size_t>(k_max_slots, (n + 127) / 128 * 128);
+    if (capacity != slots.capacity())
+        slots.allocate(capacity, capacity, precision == Precision::fp16, "the sample slots", "--res");
     width = w;
     height = h;
 }
 
 uint32_t CudaViewRenderer::Impl::read_count(int which) {
-    cuda_check(cudaMemcpyAsync(host_count, counts.data() + which, sizeof(uint32_t), cudaMemcpyDeviceToHost, stream),
-               "cudaMemcpyAsync");
+    cuda_check(
+        cudaMemcpyAsync(host_count, counts.data() + which, sizeof(uint32_t), cudaMemcpyDeviceToHost, stream),
+        "cudaMemcpyAsync");
     cuda_check(cudaStreamSynchronize(stream), "rendering");
     return *host_count;
 }
@@ -111,31 +97,32 @@ void CudaViewRenderer::Impl::run(const Camera& camera, const ViewOptions& option
     f.box_min = box_min;
     f.box_max = box_max;
     f.object = view_object_cut(model, options);
-    RenderSlots slots{slot_pos.data(), slot_dt.data(), slot_pixel.data(), slot_first.data(), slot_used.data(),
-                      counts.data() + 2, slot_scratch.data()};
+    const RenderSlots round = slots.view(counts.data() + 2);
 
     cuda_check(cudaMemsetAsync(counts.data(), 0, 3 * sizeof(uint32_t), stream), "cudaMemsetAsync");
     render_init(f, make_ray_camera(camera, model.world_to_model), alive[0].data(), counts.data(), stream);
     uint32_t n = read_count(0);
     int cur = 0;
-    const uint32_t capacity = uint32_t(slot_pos.size());  // >= one slot per pixel (resize)
-    const int first = options.gpu_first_round > 0 ? std::min(options.gpu_first_round, k_max_round) : k_first_round;
+    const uint32_t capacity = uint32_t(slots.capacity());  // >= one slot per pixel (resize)
+    const int first =
+        options.gpu_first_round > 0 ? std::min(options.gpu_first_round, k_max_round) : k_first_round;
     for (int k = first; n > 0; k = std::min(2 * k, k_max_round)) {
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / n)));
         const uint32_t m = n * uint32_t(kk);  // samples this round at most
-        cuda_check(cudaMemsetAsync(slots.count, 0, sizeof(uint32_t), stream), "cudaMemsetAsync");
-        render_march(f, alive[cur].data(), n, kk, slots, stream);
+        cuda_check(cudaMemsetAsync(round.count, 0, sizeof(uint32_t), stream), "cudaMemsetAsync");
+        render_march(f, alive[cur].data(), n, kk, round, stream);
         if (precision == Precision::fp32) {
             const NerfFieldView field(layout, params.data());
-            render_field_fp32(field, slots, dirs.data(), m, slot_sigma.data(), slot_rgb.data(), stream);
+            render_field_fp32(field, round, dirs.data(), m, slots.sigma.data(), slots.rgb.data(), stream);
         } else {
-            render_field_fp16(layout, params.data(), mlp_half.data(), slots, dirs.data(), field_rows(m, capacity),
-                              slot_enc.data(), slot_sigma.data(), slot_rgb.data(), stream);
+            render_field_fp16(layout, params.data(), mlp_half.data(), round, dirs.data(),
+                              field_rows(m, capacity), slots.encoded.data(), slots.sigma.data(),
+                              slots.rgb.data(), stream);
         }
         const int nxt = 1 - cur;
         cuda_check(cudaMemsetAsync(counts.data() + nxt, 0, sizeof(uint32_t), stream), "cudaMemsetAsync");
-        render_composite(f, alive[cur].data(), n, kk, slots, slot_sigma.data(), slot_rgb.data(), alive[nxt].data(),
-                         counts.data() + nxt, stream);
+        render_composite(f, alive[cur].data(), n, kk, round, slots.sigma.data(), slots.rgb.data(),
+                         alive[nxt].data(), counts.data() + nxt, stream);
         n = read_count(nxt);
         cur = nxt;
     }

@@ -9,6 +9,7 @@
 #include "nerf/cuda/march_slots.cuh"
 #include "nerf/cuda/occupancy_bits.h"
 #include "nerf/cuda/render_kernels.h"
+#include "nerf/cuda/sample_slots.h"
 
 namespace npt::nerf::cuda {
 
@@ -131,12 +132,7 @@ struct CudaWaveMarcher::Impl {
     DeviceBuffer<Vec3> dirs;
     DeviceBuffer<uint32_t> alive[2];
     // Per round.
-    DeviceBuffer<Vec3> slot_pos;
-    DeviceBuffer<float> slot_dt, slot_sigma;
-    DeviceBuffer<uint32_t> slot_owner, slot_first;
-    DeviceBuffer<uint8_t> slot_used;
-    DeviceBuffer<float4> slot_scratch;
-    DeviceBuffer<Rgb> slot_rgb;
+    SampleSlotBuffers slots;
     uint32_t* host_count = nullptr;
 
     ~Impl() {
@@ -158,17 +154,8 @@ void CudaWaveMarcher::Impl::reserve(size_t n) {
         alive[1].allocate(n, what, lower);
     }
     // At least one sample slot per ray, so that every live ray takes part in every round.
-    const size_t slots = std::max<size_t>(k_min_slots, (n + 127) / 128 * 128);
-    if (slots > slot_pos.size()) {
-        slot_pos.allocate(slots, what, lower);
-        slot_dt.allocate(slots, what, lower);
-        slot_sigma.allocate(slots, what, lower);
-        slot_owner.allocate(slots, what, lower);
-        slot_first.allocate(slots, what, lower);
-        slot_used.allocate(slots, what, lower);
-        slot_scratch.allocate(slots, what, lower);
-        slot_rgb.allocate(slots, what, lower);
-    }
+    const size_t capacity = std::max<size_t>(k_min_slots, (n + 127) / 128 * 128);
+    if (capacity > slots.capacity()) slots.allocate(capacity, capacity, false, what, lower);
 }
 
 uint32_t CudaWaveMarcher::Impl::read_count(int which) {
@@ -210,8 +197,7 @@ void CudaWaveMarcher::march(std::vector<WaveRay>& host_rays, WaveMode mode) {
     cuda_check(cudaMemcpyAsync(I.rays.data(), host_rays.data(), total * sizeof(WaveRay),
                                cudaMemcpyHostToDevice, I.stream),
                "cudaMemcpyAsync");
-    RenderSlots slots{I.slot_pos.data(),  I.slot_dt.data(),    I.slot_owner.data(),  I.slot_first.data(),
-                      I.slot_used.data(), I.counts.data() + 2, I.slot_scratch.data()};
+    const RenderSlots slots = I.slots.view(I.counts.data() + 2);
     cuda_check(cudaMemsetAsync(I.counts.data(), 0, 3 * sizeof(uint32_t), I.stream), "cudaMemsetAsync");
     init_kernel<<<blocks_for(n), k_block, 0, I.stream>>>(I.rays.data(), n, I.march, I.grid, I.state.data(),
                                                          I.dirs.data(), I.alive[0].data(), I.counts.data());
@@ -219,7 +205,7 @@ void CudaWaveMarcher::march(std::vector<WaveRay>& host_rays, WaveMode mode) {
     uint32_t live = I.read_count(0);
     int cur = 0;
     const bool color = mode == WaveMode::radiance;
-    const uint32_t capacity = uint32_t(I.slot_pos.size());  // >= one slot per ray (reserve)
+    const uint32_t capacity = uint32_t(I.slots.capacity());  // >= one slot per ray (reserve)
     for (int k = k_first_round; live > 0; k = std::min(2 * k, k_max_round)) {
         const int kk = int(std::max<uint32_t>(1, std::min<uint32_t>(uint32_t(k), capacity / live)));
         const uint32_t most = live * uint32_t(kk);
@@ -229,13 +215,13 @@ void CudaWaveMarcher::march(std::vector<WaveRay>& host_rays, WaveMode mode) {
         NPT_CUDA_CHECK_LAUNCH("wave march_kernel");
         const NerfFieldView field(I.layout, I.params.data());
         field_fp32_kernel<<<std::min(blocks_for(most), 132u * 16u), k_block, 0, I.stream>>>(
-            field, slots, I.dirs.data(), color, I.slot_sigma.data(), I.slot_rgb.data());
+            field, slots, I.dirs.data(), color, I.slots.sigma.data(), I.slots.rgb.data());
         NPT_CUDA_CHECK_LAUNCH("wave field_fp32_kernel");
         const int nxt = 1 - cur;
         cuda_check(cudaMemsetAsync(I.counts.data() + nxt, 0, sizeof(uint32_t), I.stream), "cudaMemsetAsync");
         composite_kernel<<<blocks_for(live), k_block, 0, I.stream>>>(
             I.rays.data(), I.state.data(), I.alive[cur].data(), live, mode, I.march, slots,
-            I.slot_sigma.data(), I.slot_rgb.data(), I.alive[nxt].data(), I.counts.data() + nxt);
+            I.slots.sigma.data(), I.slots.rgb.data(), I.alive[nxt].data(), I.counts.data() + nxt);
         NPT_CUDA_CHECK_LAUNCH("wave composite_kernel");
         live = I.read_count(nxt);
         cur = nxt;

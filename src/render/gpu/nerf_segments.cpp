@@ -8,6 +8,7 @@
 #include "nerf/cuda/fused_mlp.h"
 #include "nerf/cuda/occupancy_bits.h"
 #include "nerf/cuda/render_kernels.h"
+#include "nerf/cuda/sample_slots.h"
 #include "render/gpu/nerf_segment_kernels.h"
 
 namespace npt::gpu {
@@ -46,13 +47,7 @@ struct NerfSegmentPass::Buffers {
     DeviceBuffer<SegmentState> states;
     DeviceBuffer<Vec3> dirs;
     DeviceBuffer<uint32_t> live[2];
-    DeviceBuffer<Vec3> pos;
-    DeviceBuffer<float> dt, sigma;
-    DeviceBuffer<uint32_t> owner, first;
-    DeviceBuffer<uint8_t> used;
-    DeviceBuffer<float4> scratch;
-    DeviceBuffer<Rgb> rgb;
-    DeviceBuffer<__half> encoded;
+    nerf::cuda::SampleSlotBuffers slots;  // b.samples slots, b.segments rays
     std::vector<uint32_t> host_counts;
 };
 
@@ -120,15 +115,7 @@ NerfSegmentPass::NerfSegmentPass(Span<const media::VolumeView> host, Span<const 
     b.dirs.allocate(b.segments, "the NeRF segments", lower);
     b.live[0].allocate(b.segments, "the NeRF segments", lower);
     b.live[1].allocate(b.segments, "the NeRF segments", lower);
-    b.first.allocate(b.segments, "the NeRF segments", lower);
-    b.used.allocate(b.segments, "the NeRF segments", lower);
-    b.pos.allocate(b.samples, "the NeRF samples", lower);
-    b.dt.allocate(b.samples, "the NeRF samples", lower);
-    b.sigma.allocate(b.samples, "the NeRF samples", lower);
-    b.owner.allocate(b.samples, "the NeRF samples", lower);
-    b.scratch.allocate(b.samples, "the NeRF samples", lower);
-    b.rgb.allocate(b.samples, "the NeRF samples", lower);
-    b.encoded.allocate(b.samples * nerf::cuda::k_mlp_inputs, "the NeRF samples", lower);
+    b.slots.allocate(b.samples, b.segments, true, "the NeRF samples", lower);
     cuda_check(cudaStreamSynchronize(stream), "preparing the NeRF pass");
 }
 
@@ -181,8 +168,7 @@ void NerfSegmentPass::evaluate(const PathStore& paths, size_t model, uint32_t n)
     uint32_t live = read(live_count);
     const uint32_t capacity = uint32_t(b.samples);
     const NerfPassTuning& t = m_tuning;
-    const nerf::cuda::RenderSlots samples{b.pos.data(),  b.dt.data(),  b.owner.data(),  b.first.data(),
-                                          b.used.data(), sample_count, b.scratch.data()};
+    const nerf::cuda::RenderSlots samples = b.slots.view(sample_count);
     // The warp form needs the global lattice of uniform steps.
     const uint32_t warp_below = m.march.cone_angle == 0.0f ? t.warp_below : 0u;
     const int max_round = std::clamp(t.max_round, 1, 255),
@@ -197,21 +183,22 @@ void NerfSegmentPass::evaluate(const PathStore& paths, size_t model, uint32_t n)
         cuda_check(cudaMemsetAsync(sample_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
         segment_march(m, b.states.data(), b.live[cur].data(), live, kk, by_warp, samples, m_stream);
         // With colour for every sample of an emissive model: the shadow segments' colour is not needed, but
-        // evaluating both kinds in the same rounds halves the rounds (and their synchronisations); packing the
-        // shadow samples apart for a density-only evaluation was measured at no gain (docs/benchmarks.md, issue
-        // 13). A relit model never needs the colour.
+        // evaluating both kinds in the same rounds halves the rounds (and their synchronisations); packing
+        // the shadow samples apart for a density-only evaluation was measured at no gain (docs/benchmarks.md,
+        // issue 13). A relit model never needs the colour.
         const uint32_t rows = nerf::cuda::field_rows(uint64_t(live) * uint64_t(kk), capacity);
         if (m.relit)
-            nerf::cuda::render_density_fp16(m.layout, m.params, m.mlp_half, samples, rows, b.encoded.data(),
-                                            b.sigma.data(), m_stream);
+            nerf::cuda::render_density_fp16(m.layout, m.params, m.mlp_half, samples, rows,
+                                            b.slots.encoded.data(), b.slots.sigma.data(), m_stream);
         else
             nerf::cuda::render_field_fp16(m.layout, m.params, m.mlp_half, samples, b.dirs.data(), rows,
-                                          b.encoded.data(), b.sigma.data(), b.rgb.data(), m_stream);
+                                          b.slots.encoded.data(), b.slots.sigma.data(), b.slots.rgb.data(),
+                                          m_stream);
         const int nxt = 1 - cur;
         uint32_t* next_count = b.counts.data() + 1 + nxt;
         cuda_check(cudaMemsetAsync(next_count, 0, sizeof(uint32_t), m_stream), "cudaMemsetAsync");
         segment_composite(m, paths, list, b.states.data(), b.live[cur].data(), live, by_warp, samples,
-                          b.sigma.data(), b.rgb.data(), b.live[nxt].data(), next_count, m_stream);
+                          b.slots.sigma.data(), b.slots.rgb.data(), b.live[nxt].data(), next_count, m_stream);
         live = read(next_count);
         cur = nxt;
     }
