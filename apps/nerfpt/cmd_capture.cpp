@@ -323,6 +323,9 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                 {"mapping_cpu_seconds", s.cpu_seconds[2]},
                                 {"loop_closure_cpu_seconds", s.cpu_seconds[3]},
                                 {"loop_pairs", s.loop_pairs},
+                                {"refine_seconds", s.seconds[4]},
+                                {"refine_cpu_seconds", s.cpu_seconds[4]},
+                                {"refine_threshold_px", s.refine_threshold_px},
                                 {"model", fs::relative(s.model_folder, work).string()},
                                 {"seconds", clock.seconds()}});
     }

@@ -39,7 +39,8 @@ CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
         "feature_extractor (one camera shared by all frames, --camera-model), the sequential matcher (frames of a video,\n"
         "in name order, each with its next 15) or the exhaustive one, and the mapper; keeps the reconstruction\n"
         "with the most frames (fast and balanced then close its loops: frames whose cameras revisit an\n"
-        "earlier view, 16 or more frames before, are matched with it and the mapper runs again), warns when\n"
+        "earlier view, 16 or more frames before, are matched with it and the mapper runs again, then drop the\n"
+        "observations that reproject more than twice the model's mean error and adjust it again), warns when\n"
         "the camera path leaps between neighbouring frames, and\n"
         "writes transforms.json as instant-ngp's colmap2nerf does: OpenGL cameras, the average camera up turned\n"
         "to +Z, the point the cameras look at moved to the origin, the mean camera distance scaled to 4,\n"
@@ -113,8 +114,8 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
                registered, run.frames, run.model_folder.string(), run.model.points.size(), rep.mean_px,
                args.quality, run.max_num_features);
     // CPU time beside wall time: on a shared machine only the first is comparable between runs.
-    static const char* const k_steps[capture::k_colmap_steps] = {"extraction", "matching", "mapping",
-                                                                 "loops"};
+    static const char* const k_steps[capture::k_colmap_steps] = {"extraction", "matching", "mapping", "loops",
+                                                                 "refine"};
     if (!run.model.cameras.empty()) {
         const capture::ColmapCamera& c = run.model.cameras.front();
         const capture::Intrinsics k = c.intrinsics();
@@ -125,9 +126,15 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
     }
     for (int i = 0; i < capture::k_colmap_steps; ++i) {
         if (i == 3 && run.loop_pairs == 0) continue;  // no loop closure: nothing revisited, or not asked for
+        if (i == 4 && run.refine_threshold_px == 0) continue;  // not run (best), or its model was not kept
+        std::string what;
+        if (i == 3) what = fmt::format(": {} revisiting pairs matched, mapped again", run.loop_pairs);
+        if (i == 4)
+            what = fmt::format(
+                ": observations over {:.2f} px dropped, adjusted again (mean error {:.3f} -> {:.3f} px)",
+                run.refine_threshold_px, run.refine_error_before_px, run.refine_error_after_px);
         fmt::print("  {:<10} {:6.1f} s wall, {:6.1f} s CPU (load {:.2f} at start){}\n", k_steps[i],
-                   run.seconds[i], run.cpu_seconds[i], run.load_at_start[i],
-                   i == 3 ? fmt::format(": {} revisiting pairs matched, mapped again", run.loop_pairs) : "");
+                   run.seconds[i], run.cpu_seconds[i], run.load_at_start[i], what);
     }
     if (double(registered) < args.min_registered * double(run.frames) || registered < 3)
         throw Error(fmt::format(
@@ -163,6 +170,8 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
     summary.reprojection_px = rep.mean_px;
     summary.path_jumps = jumps.size();
     summary.loop_pairs = run.loop_pairs;
+    summary.refine_threshold_px = run.refine_threshold_px;
+    static_assert(capture::k_colmap_steps == sizeof(summary.seconds) / sizeof(summary.seconds[0]));
     for (int i = 0; i < capture::k_colmap_steps; ++i) {
         summary.seconds[i] = run.seconds[i];
         summary.cpu_seconds[i] = run.cpu_seconds[i];

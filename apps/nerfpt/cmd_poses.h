@@ -36,9 +36,11 @@ struct PosesSummary {
     size_t frames = 0, registered = 0, points = 0;
     double reprojection_px = 0;
     size_t path_jumps = 0;  // capture/path_continuity.h
-    double seconds[4] = {0, 0, 0, 0};      // extraction, matching, mapping, loop closure (wall)
-    double cpu_seconds[4] = {0, 0, 0, 0};  // the same steps' CPU time (user + system)
-    size_t loop_pairs = 0;                 // revisiting pairs the loop closure matched
+    // extraction, matching, mapping, loop closure, refinement (capture::k_colmap_steps)
+    double seconds[5] = {};          // wall
+    double cpu_seconds[5] = {};      // the same steps' CPU time (user + system)
+    size_t loop_pairs = 0;           // revisiting pairs the loop closure matched
+    double refine_threshold_px = 0;  // the refinement's filter (0: not run)
     int max_num_features = 0;       // SIFT budget per frame
     std::string model_folder;       // the COLMAP model transforms.json was written from
 };

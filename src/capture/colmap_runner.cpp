@@ -126,6 +126,41 @@ std::string arg(double v) {
     return s;
 }
 
+// Drops the observations of run.model that reproject more than s.refine_error_ratio times its mean error and
+// adjusts the whole model again, into work/sparse_refined; the refined model replaces run.model unless a step
+// fails or it lost frames or its points.
+void refine_model(const ColmapSettings& s, const fs::path& work, ColmapRun& run,
+                  const ColmapStepFn& on_step) {
+    const ReprojectionStats before = reprojection_error(run.model);
+    if (before.observations == 0 || !(before.mean_px > 0)) return;
+    if (on_step) on_step("refinement");
+    const fs::path refined = work / "sparse_refined";
+    std::error_code ec;
+    fs::remove_all(refined, ec);
+    fs::create_directories(refined, ec);
+    if (ec) throw Error(refined.string() + ": cannot create the folder (" + ec.message() + ")");
+    const double threshold = s.refine_error_ratio * before.mean_px;
+    run_step(4,
+             {"observation filtering",
+              "refine_filter.log",
+              {s.colmap, "point_filtering", "--input_path", run.model_folder.string(), "--output_path",
+               refined.string(), "--max_reproj_error", arg(threshold)}},
+             work, run);
+    run_step(
+        4,
+        {"bundle adjustment",
+         "refine_adjuster.log",
+         {s.colmap, "bundle_adjuster", "--input_path", refined.string(), "--output_path", refined.string()}},
+        work, run);
+    ColmapModel model = read_colmap_model(refined);
+    if (model.images.size() < run.model.images.size() || model.points.empty()) return;
+    run.refine_threshold_px = threshold;
+    run.refine_error_before_px = before.mean_px;
+    run.refine_error_after_px = reprojection_error(model).mean_px;
+    run.model = std::move(model);
+    run.model_folder = refined;
+}
+
 }  // namespace
 
 PosesQuality parse_poses_quality(const std::string& name) {
@@ -218,6 +253,7 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
     fs::remove(db, ec);
     fs::remove_all(work / "sparse", ec);
     fs::remove_all(work / "sparse_loops", ec);
+    fs::remove_all(work / "sparse_refined", ec);
     fs::create_directories(work / "sparse", ec);
     // COLMAP reads every file of the folder otherwise (curate.json, the contact sheet).
     const fs::path list = work / "frames.txt";
@@ -302,6 +338,7 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
             }
         }
     }
+    if (s.refine_error_ratio > 0 && s.quality != PosesQuality::Best) refine_model(s, work, run, on_step);
     return run;
 }
 

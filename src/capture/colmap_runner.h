@@ -1,8 +1,10 @@
-// Recovers camera poses for a folder of frames by running the `colmap` command-line tool (Debian's package, CPU
-// only): feature extraction with one camera shared by all frames, sequential or exhaustive matching, and the
-// incremental mapper, in a work folder; then picks the reconstruction that registered the most frames. The
-// faster qualities then close the loops of a video (capture/revisit_pairs.h): frames that revisit an earlier
-// view are matched with it and the mapper runs again with those matches.
+// Recovers camera poses for a folder of frames by running the `colmap` command-line tool (Debian's package,
+// CPU only): feature extraction with one camera shared by all frames, sequential or exhaustive matching, and
+// the incremental mapper, in a work folder; then picks the reconstruction that registered the most frames.
+// The faster qualities then close the loops of a video (capture/revisit_pairs.h): frames that revisit an
+// earlier view are matched with it and the mapper runs again with those matches. Last, they refine the model:
+// the observations far above its mean reprojection error are dropped and a global bundle adjustment runs
+// again.
 #pragma once
 
 #include <filesystem>
@@ -37,6 +39,13 @@ struct ColmapSettings {
     // again (fast and balanced; best is COLMAP's own pipeline). On the handheld capture the rotation error fell
     // from 0.89° to 0.28° (docs/benchmarks.md, "Poses as accurate as before the speed-up").
     bool close_loops = true;
+    // After the last model (fast and balanced): drop the observations that reproject more than this many
+    // times the model's mean reprojection error (`colmap point_filtering`) and adjust the whole model again
+    // (`colmap bundle_adjuster`); 0: off. The mapper keeps observations up to 4 px, 7-8x the mean of a
+    // 540x960 capture's model, and they bend its path: on three handheld captures the rotation error's median
+    // fell by 21-27% (docs/benchmarks.md, "Refining the model: observations over twice the mean error
+    // dropped").
+    double refine_error_ratio = 2.0;
     PosesQuality quality = PosesQuality::Fast;
     int threads = 0;  // every step's num_threads; 0: all hardware threads (passed explicitly all the same)
 };
@@ -49,23 +58,27 @@ struct ColmapStepOptions {
 };
 ColmapStepOptions colmap_step_options(const ColmapSettings& settings, int frame_width, int frame_height);
 
-// Extraction, matching, mapping, loop closure (matching the revisiting pairs and mapping again).
-constexpr int k_colmap_steps = 4;
+// Extraction, matching, mapping, loop closure (matching the revisiting pairs and mapping again), refinement
+// (filtering the observations and adjusting again).
+constexpr int k_colmap_steps = 5;
 
 struct ColmapRun {
     ColmapModel model;
     std::filesystem::path model_folder;  // work/sparse/N or work/sparse_loops/N that was chosen
     size_t frames = 0;                   // images in the frames folder
-    double seconds[k_colmap_steps] = {0, 0, 0, 0};  // wall time of each step (0: not run)
+    double seconds[k_colmap_steps] = {};  // wall time of each step (0: not run)
     // The same steps' CPU time (user + system of COLMAP's threads), and the machine's 1-minute load average
     // when each started: wall time means something only on a quiet machine, CPU time everywhere.
-    double cpu_seconds[k_colmap_steps] = {0, 0, 0, 0};
-    double load_at_start[k_colmap_steps] = {0, 0, 0, 0};
+    double cpu_seconds[k_colmap_steps] = {};
+    double load_at_start[k_colmap_steps] = {};
     int max_num_features = 0;  // SIFT budget per frame (ColmapStepOptions)
     size_t loop_pairs = 0;     // revisiting pairs matched by the loop closure (0: none found or not run)
+    // Refinement: the threshold used (0: not run), and the mean reprojection error before and after (px).
+    double refine_threshold_px = 0, refine_error_before_px = 0, refine_error_after_px = 0;
 };
 
-// Called before each step with its name ("feature extraction", "matching", "mapping", "loop closure").
+// Called before each step with its name ("feature extraction", "matching", "mapping", "loop closure",
+// "refinement").
 using ColmapStepFn = std::function<void(const std::string& step)>;
 
 // Runs COLMAP on every .png/.jpg/.jpeg in `frames` (except curate's contact_sheet.png) with `work` as its work folder (created; an old database

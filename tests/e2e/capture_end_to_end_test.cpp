@@ -117,6 +117,9 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
     const nlohmann::json& stages = record.at("stages");
     for (const char* stage : {"curate", "poses", "object", "split", "train", "eval", "isolate", "turntable"})
         EXPECT_TRUE(stages.contains(stage)) << "capture.json has no '" << stage << "' stage";
+    // The poses came from the refined model (observations over twice the mean error dropped, adjusted again).
+    EXPECT_GT(stages["poses"].value("refine_threshold_px", 0.0), 0.0) << stages["poses"].dump();
+    EXPECT_EQ(stages["poses"].value("model", ""), "colmap/sparse_refined") << stages["poses"].dump();
     const int kept = stages["curate"]["kept"].get<int>();  // a window whose best frame is blurry keeps none
     EXPECT_GE(kept, 70);
     EXPECT_TRUE(std::isfinite(stages["eval"]["psnr"].get<double>()));
