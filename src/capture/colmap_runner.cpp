@@ -56,6 +56,10 @@ struct QualityPreset {
     // these iterations and refinements; local ones with at most these iterations.
     double ba_global_ratio;
     int ba_global_max_iterations, ba_global_max_refinements, ba_local_max_iterations;
+    // Mapper: observations that reproject farther (px) are dropped after each adjustment (COLMAP: 4). At 2
+    // the rotation error fell on all four handheld captures measured, by 2-40% (docs/benchmarks.md, "Refining
+    // the model").
+    double filter_max_reproj_error;
 };
 
 // Frames whose longer side is below this are doubled for SIFT even by `fast`: at 320x240 without doubling
@@ -71,13 +75,13 @@ constexpr int k_ba_min_residuals_for_threads = 1000;
 QualityPreset preset(PosesQuality q) {
     switch (q) {
         case PosesQuality::Fast:
-            return {false, false, 1000, 512, 4096, 2.0, 20, 1, 10};
+            return {false, false, 1000, 512, 4096, 2.0, 20, 1, 10, 2.0};
         case PosesQuality::Balanced:
-            return {false, true, 2000, 2048, 8192, 1.5, 25, 2, 15};
+            return {false, true, 2000, 2048, 8192, 1.5, 25, 2, 15, 2.0};
         case PosesQuality::Best:
             break;
     }
-    return {true, true, 0, 8192, 8192, 1.1, 50, 5, 25};
+    return {true, true, 0, 8192, 8192, 1.1, 50, 5, 25, 4.0};
 }
 
 struct Step {
@@ -208,6 +212,7 @@ ColmapStepOptions colmap_step_options(const ColmapSettings& s, int frame_width, 
                                                  "--SiftExtraction.max_num_features", features};
     const std::vector<std::string> matching = {"--SiftMatching.max_num_matches", features};
     // Point colours are not used by nerfpt; reading every frame again for them costs ~5% of the mapping.
+    // clang-format off
     const std::vector<std::string> mapping = {
         "--Mapper.ba_global_images_ratio", arg(p.ba_global_ratio),
         "--Mapper.ba_global_points_ratio", arg(p.ba_global_ratio),
@@ -215,7 +220,9 @@ ColmapStepOptions colmap_step_options(const ColmapSettings& s, int frame_width, 
         "--Mapper.ba_global_max_refinements", std::to_string(p.ba_global_max_refinements),
         "--Mapper.ba_local_max_num_iterations", std::to_string(p.ba_local_max_iterations),
         "--Mapper.ba_min_num_residuals_for_multi_threading", std::to_string(k_ba_min_residuals_for_threads),
+        "--Mapper.filter_max_reproj_error", arg(p.filter_max_reproj_error),
         "--Mapper.extract_colors", "0"};
+    // clang-format on
     o.extraction.insert(o.extraction.end(), extraction.begin(), extraction.end());
     o.matching.insert(o.matching.end(), matching.begin(), matching.end());
     o.mapping.insert(o.mapping.end(), mapping.begin(), mapping.end());

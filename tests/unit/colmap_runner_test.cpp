@@ -74,6 +74,7 @@ TEST(ColmapRunner, FasterQualitiesBudgetFeaturesByFrameSize) {
                   std::to_string(hd.max_num_features));
         EXPECT_TRUE(mentions(hd.mapping, "--Mapper.ba_global_images_ratio"));
         EXPECT_TRUE(mentions(hd.mapping, "--Mapper.ba_local_max_num_iterations"));
+        EXPECT_EQ(value_of(hd.mapping, "--Mapper.filter_max_reproj_error"), "2");
     }
     // The measured budgets (docs/benchmarks.md): fast 1000 per megapixel at the frame's size, balanced 2000
     // per megapixel of the doubled frame.
