@@ -124,6 +124,8 @@ PosesSummary poses_stage(const PosesArgs& args, const GlobalSettings& global, In
                    capture::camera_model_name(c.model), c.width, c.height, k.fx, k.fy, k.cx, k.cy, k.k1, k.k2,
                    k.p1, k.p2);
     }
+    if (!run.refine_skipped.empty())
+        spdlog::warn("the poses are the unrefined model's: {}", run.refine_skipped);
     for (int i = 0; i < capture::k_colmap_steps; ++i) {
         if (i == 3 && run.loop_pairs == 0) continue;  // no loop closure: nothing revisited, or not asked for
         if (i == 4 && run.refine_threshold_px == 0) continue;  // not run (best), or its model was not kept

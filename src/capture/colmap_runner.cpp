@@ -132,7 +132,7 @@ std::string arg(double v) {
 
 // Drops the observations of run.model that reproject more than s.refine_error_ratio times its mean error and
 // adjusts the whole model again, into work/sparse_refined; the refined model replaces run.model unless a step
-// fails or it lost frames or its points.
+// fails or it lost frames or its points (then run.refine_skipped says why: the poses are kept, not lost).
 void refine_model(const ColmapSettings& s, const fs::path& work, ColmapRun& run,
                   const ColmapStepFn& on_step) {
     const ReprojectionStats before = reprojection_error(run.model);
@@ -144,20 +144,29 @@ void refine_model(const ColmapSettings& s, const fs::path& work, ColmapRun& run,
     fs::create_directories(refined, ec);
     if (ec) throw Error(refined.string() + ": cannot create the folder (" + ec.message() + ")");
     const double threshold = s.refine_error_ratio * before.mean_px;
-    run_step(4,
-             {"observation filtering",
-              "refine_filter.log",
-              {s.colmap, "point_filtering", "--input_path", run.model_folder.string(), "--output_path",
-               refined.string(), "--max_reproj_error", arg(threshold)}},
-             work, run);
-    run_step(
-        4,
-        {"bundle adjustment",
-         "refine_adjuster.log",
-         {s.colmap, "bundle_adjuster", "--input_path", refined.string(), "--output_path", refined.string()}},
-        work, run);
-    ColmapModel model = read_colmap_model(refined);
-    if (model.images.size() < run.model.images.size() || model.points.empty()) return;
+    ColmapModel model;
+    try {
+        run_step(4,
+                 {"observation filtering",
+                  "refine_filter.log",
+                  {s.colmap, "point_filtering", "--input_path", run.model_folder.string(), "--output_path",
+                   refined.string(), "--max_reproj_error", arg(threshold)}},
+                 work, run);
+        run_step(4,
+                 {"bundle adjustment",
+                  "refine_adjuster.log",
+                  {s.colmap, "bundle_adjuster", "--input_path", refined.string(), "--output_path",
+                   refined.string()}},
+                 work, run);
+        model = read_colmap_model(refined);
+    } catch (const Error& e) {
+        run.refine_skipped = e.what();
+        return;
+    }
+    if (model.images.size() < run.model.images.size() || model.points.empty()) {
+        run.refine_skipped = "the refined model (" + refined.string() + ") lost frames or its points";
+        return;
+    }
     run.refine_threshold_px = threshold;
     run.refine_error_before_px = before.mean_px;
     run.refine_error_after_px = reprojection_error(model).mean_px;

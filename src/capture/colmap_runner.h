@@ -75,6 +75,7 @@ struct ColmapRun {
     size_t loop_pairs = 0;     // revisiting pairs matched by the loop closure (0: none found or not run)
     // Refinement: the threshold used (0: not run), and the mean reprojection error before and after (px).
     double refine_threshold_px = 0, refine_error_before_px = 0, refine_error_after_px = 0;
+    std::string refine_skipped;  // why the refinement's model was not used (a step failed, ...); empty: used
 };
 
 // Called before each step with its name ("feature extraction", "matching", "mapping", "loop closure",

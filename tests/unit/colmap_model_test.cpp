@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "capture/colmap_runner.h"
 #include "capture/transforms_writer.h"
 #include "core/error.h"
 #include "nerf/dataset.h"
@@ -574,6 +575,66 @@ TEST(TransformsWriter, BadInput) {
                                {"t.json", "aabb_scale"});
     test::expect_error_message([&] { write_transforms(make_ring().model, dir / "no" / "such" / "t.json"); },
                                {"t.json", "cannot write"});
+}
+
+// run_colmap's last step with a stand-in for the colmap tool (a script): its mapper writes the ring (with
+// observations moved half a pixel, so the mean error is not zero), its filter copies the model, its bundle
+// adjuster copies it too or fails. The refinement's model is used when every step succeeded; when one fails
+// the mapper's poses are kept and the run says why, instead of the whole stage failing.
+ColmapRun run_with_stand_in(const fs::path& dir, bool adjuster_fails) {
+    Ring ring = make_ring();
+    for (ColmapImage& im : ring.model.images)
+        for (Point2D& p : im.points2d) p.x += 0.5;
+    write_model(dir / "mapped", ring.model);
+    fs::create_directories(dir / "frames");
+    std::vector<uint8_t> px(4 * 4 * 3, 128);
+    for (const auto& im : ring.model.images)
+        EXPECT_TRUE(stbi_write_png((dir / "frames" / im.name).string().c_str(), 4, 4, 3, px.data(), 12));
+    const fs::path tool = dir / "colmap";
+    const std::string head = "#!/bin/sh\ncalls='" + (dir / "calls.txt").string() + "'; mapped='" +
+                             (dir / "mapped").string() + "'\n";
+    const std::string body = R"(echo "$@" >> "$calls"
+cmd=$1; shift; in=; out=
+while [ $# -gt 1 ]; do case $1 in --input_path) in=$2;; --output_path) out=$2;; esac; shift; done
+case $cmd in
+  mapper) mkdir -p "$out/0" && cp "$mapped"/*.bin "$out/0/";;
+  point_filtering) cp "$in"/*.bin "$out/";;
+)";
+    const std::string fail = adjuster_fails ? "  bundle_adjuster) echo 'Ceres: no convergence'; exit 3;;\n" : "";
+    test::write_file(tool, head + body + fail + "esac\n");
+    fs::permissions(tool, fs::perms::owner_all);
+    ColmapSettings s;
+    s.colmap = tool.string();
+    return run_colmap(dir / "frames", dir / "work", s);
+}
+
+TEST(ColmapRunner, RefinesTheModelWithTwiceItsMeanError) {
+    const fs::path dir = test::temp_dir();
+    const ColmapRun run = run_with_stand_in(dir, false);
+    EXPECT_TRUE(run.refine_skipped.empty()) << run.refine_skipped;
+    EXPECT_EQ(run.model_folder, dir / "work" / "sparse_refined");
+    EXPECT_EQ(run.model.images.size(), 4u);
+    EXPECT_NEAR(run.refine_error_before_px, 0.5, 1e-6);
+    EXPECT_NEAR(run.refine_threshold_px, 1.0, 1e-6);
+    const std::string calls = test::read_text(dir / "calls.txt");
+    EXPECT_NE(
+        calls.find("point_filtering --input_path " + (dir / "work" / "sparse" / "0").string() +
+                   " --output_path " + (dir / "work" / "sparse_refined").string() + " --max_reproj_error 1"),
+        std::string::npos)
+        << calls;
+    EXPECT_NE(calls.find("bundle_adjuster"), std::string::npos) << calls;
+    EXPECT_GT(run.seconds[4], 0.0);
+}
+
+TEST(ColmapRunner, AFailedRefinementKeepsTheMappersPoses) {
+    const fs::path dir = test::temp_dir();
+    const ColmapRun run = run_with_stand_in(dir, true);
+    EXPECT_EQ(run.model_folder, dir / "work" / "sparse" / "0");
+    EXPECT_EQ(run.model.images.size(), 4u);
+    EXPECT_EQ(run.refine_threshold_px, 0.0);
+    EXPECT_NE(run.refine_skipped.find("bundle adjustment failed (exit 3"), std::string::npos)
+        << run.refine_skipped;
+    EXPECT_NE(run.refine_skipped.find("Ceres: no convergence"), std::string::npos) << run.refine_skipped;
 }
 
 TEST(ColmapModel, BeerReferenceModel) {
