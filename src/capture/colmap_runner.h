@@ -41,10 +41,10 @@ struct ColmapSettings {
     bool close_loops = true;
     // After the last model (fast and balanced): drop the observations that reproject more than this many
     // times the model's mean reprojection error (`colmap point_filtering`) and adjust the whole model again
-    // (`colmap bundle_adjuster`); 0: off. The mapper keeps observations up to 4 px, 7-8x the mean of a
-    // 540x960 capture's model, and they bend its path: on three handheld captures the rotation error's median
-    // fell by 21-27% (docs/benchmarks.md, "Refining the model: observations over twice the mean error
-    // dropped").
+    // (`colmap bundle_adjuster`); 0: off. The mapper keeps observations up to 2 px (COLMAP's default: 4), about
+    // 4x the mean of a 540x960 capture's model, and enough of them are wrong to bend the path: on four handheld
+    // captures the rotation error's median fell by 21-27% (docs/benchmarks.md, "Refining the model:
+    // observations over twice the mean error dropped").
     double refine_error_ratio = 2.0;
     PosesQuality quality = PosesQuality::Fast;
     int threads = 0;  // every step's num_threads; 0: all hardware threads (passed explicitly all the same)
