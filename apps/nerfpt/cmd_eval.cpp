@@ -159,6 +159,18 @@ nlohmann::json mask_json(const MaskScores& s) {
             {"leak", s.leak}};
 }
 
+// Whether every evaluated view's photo is opaque (alpha 255 everywhere): a real capture, not a rendered
+// object.
+bool views_are_opaque(const nerf::Dataset& data, const std::vector<size_t>& views) {
+    const size_t pixels = size_t(data.width) * size_t(data.height);
+    for (size_t i : views) {
+        const uint8_t* px = data.image(i);
+        for (size_t p = 0; p < pixels; ++p)
+            if (px[p * 4 + 3] != 255) return false;
+    }
+    return true;
+}
+
 }  // namespace
 
 int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard& interrupts) {
@@ -291,6 +303,14 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     }
     fmt::print("mean over {} views: psnr {:.2f} dB  ssim {:.4f}{}  ({} in all)\n", views.size(), mean_psnr,
                mean_ssim, mask_text, format_seconds(seconds));
+    // An isolated object against photos of a whole room: the whole-image numbers then compare white with the
+    // room (a few dB), which reads like a broken model.
+    const bool object_alone = args.object || (model.object && model.object->object_only);
+    if (object_alone && views_are_opaque(data, views))
+        spdlog::info(
+            "the model is the object alone, rendered over white, and these photos have no alpha: psnr and "
+            "ssim compare white with the photos' surroundings too; the object's own numbers are the mask "
+            "metrics (--masks: iou, psnr in mask)");
     if (!args.output.empty()) {
         nlohmann::json metrics = {{"model", args.model},
                                   {"data", args.data},

@@ -135,6 +135,19 @@ TEST(CaptureEndToEnd, RecoversTurntablePosesAndTrains) {
         << "the isolated model renders its object alone";
     ASSERT_TRUE(fs::exists(work / "model_scene.npt"));
     EXPECT_FALSE(nerf::load_model(work / "model_scene.npt").object.value_or(nerf::ObjectFrame{}).object_only);
+    // `eval` of the object alone against the opaque frames says why its whole-image PSNR is low; of the whole
+    // scene it does not.
+    const int eval_object = run_cli({"eval", (work / "model.npt").string(), work.string(), "--split", "test"},
+                                    dir / "eval_object.log");
+    EXPECT_EQ(eval_object, 0) << read_text(dir / "eval_object.log");
+    EXPECT_NE(read_text(dir / "eval_object.log").find("the model is the object alone"), std::string::npos)
+        << read_text(dir / "eval_object.log");
+    const int eval_scene =
+        run_cli({"eval", (work / "model_scene.npt").string(), work.string(), "--split", "test"},
+                dir / "eval_scene.log");
+    EXPECT_EQ(eval_scene, 0) << read_text(dir / "eval_scene.log");
+    EXPECT_EQ(read_text(dir / "eval_scene.log").find("object alone"), std::string::npos)
+        << read_text(dir / "eval_scene.log");
 
     // The same command again finds every stage done and changes nothing.
     const auto model_time = fs::last_write_time(work / "model.npt");
