@@ -88,12 +88,17 @@ try {
   const savedBefore = await page.evaluate(() => window.nerfpt.messages.filter((m) => m.type === 'saved').length);
   await page.evaluate(() => window.nerfpt.send({ type: 'save' }));
   await page.waitForFunction((n) => window.nerfpt.messages.filter((m) => m.type === 'saved').length > n, { timeout: 20000 }, savedBefore);
+  // Where the cube was saved: the drag sends the gizmo's position once per animation frame, and on a loaded
+  // machine the state read above can be one of the drag's earlier positions; every move sent before the save
+  // has been applied (and its state sent) by the time the save's reply arrives.
+  const txSaved = await page.evaluate(() => window.nerfpt.state.volumes[0].translation[0]);
+  check(txSaved >= tx, `saved with the cube at x = ${txSaved.toFixed(3)}`);
 
   // nerfpt render of the saved file: the cube where the gizmo put it, the wall where it was.
   const out = SCENE.replace(/scene\.json$/, 'saved_render.exr');
   execFileSync(NERFPT, ['render', SCENE, '-o', out, '--spp', '1', '-q']);
   const png = readFileSync(out.replace(/\.exr$/, '.png')).toString('base64');
-  const xNew = Math.round(80 + tx * 60 / (5 * Math.tan(Math.PI / 9)));
+  const xNew = Math.round(80 + txSaved * 60 / (5 * Math.tan(Math.PI / 9)));
   const pixels = await page.evaluate(async (data, xs) => {
     const img = new Image();
     img.src = 'data:image/png;base64,' + data;
