@@ -1,3 +1,5 @@
+#include "nerf/cuda/cuda_wave_march.h"
+
 #include <algorithm>
 #include <string>
 
@@ -5,7 +7,6 @@
 #include "core/cuda/warp_lists.cuh"
 #include "core/error.h"
 #include "nerf/cuda/cuda_device.h"
-#include "nerf/cuda/cuda_wave_march.h"
 #include "nerf/cuda/march_slots.cuh"
 #include "nerf/cuda/occupancy_bits.h"
 #include "nerf/cuda/render_kernels.h"
