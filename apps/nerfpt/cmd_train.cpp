@@ -133,6 +133,13 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "linearly, so a point's albedo follows the median of its views more than their mean (a "
                     "highlight the fit cannot explain moves it less). 0: squared error (default: 0)")
         ->check(CLI::Range(0.0f, 1.0f));
+    cmd->add_option(
+           "--relight-footprint", args.relight.footprint_queries,
+           "Where the fit reads the fields for a training pixel: 1, at one point on its camera ray; 4 or "
+           "9, averaged over a 2x2 or 3x3 grid across the pixel's square on the surface, as the photo's "
+           "pixel averages the object (a sharper albedo, at that many times the fit's network work; "
+           "default: 1)")
+        ->check(CLI::IsMember({1, 4, 9}));
     cmd->add_option("--relight-ground", args.relight.ground_share,
                     fmt::format("The capture light below the horizon starts at this share of the sky above it "
                                 "(the ground reflects part of the sky's light); the images move it where they "

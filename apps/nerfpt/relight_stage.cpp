@@ -61,6 +61,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ts.roughness_prior = options.roughness_prior;
     ts.huber_delta = options.huber_delta;
     ts.ground_share = options.ground_share;
+    ts.footprint_queries = options.footprint_queries;
     nerf::RelightTrainer trainer(model, data.cameras.size(), samples, ts);
     nerf::RelightStepStats st;
     while (trainer.steps_done() < options.steps) {

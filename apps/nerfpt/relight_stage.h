@@ -46,6 +46,7 @@ struct RelightStageOptions {
     float roughness_prior = nerf::RelightTrainSettings{}.roughness_prior;
     float huber_delta = nerf::RelightTrainSettings{}.huber_delta;
     float ground_share = nerf::RelightTrainSettings{}.ground_share;
+    int footprint_queries = nerf::RelightTrainSettings{}.footprint_queries;
     int borrowing_pixels = -1;  // -1: k_relight_pixels_* of the backend
     int pooled_neighbours = k_relight_pool;
     int table_log2 =

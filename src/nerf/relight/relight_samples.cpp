@@ -227,12 +227,14 @@ void add_borrowing_pixels(const NerfModel& model, const Dataset& data, FieldQuer
         std::vector<WaveRay> rays;
         std::vector<Rgb> target;
         std::vector<uint32_t> image;
+        std::vector<std::array<float, 2>> pixel;
         for (size_t i = 0; i < n * 2 && rays.size() < n; ++i) {  // about half the pixels are transparent
             const std::optional<PixelDraw> d = draw_opaque_pixel(rng, data, w2m, min_alpha);
             if (!d) continue;
             rays.push_back(d->ray);
             target.push_back(d->target);
             image.push_back(d->image);
+            pixel.push_back({d->px, d->py});
         }
         march_wavefront(model, query, rays, WaveMode::event);
         std::vector<size_t> hit;
@@ -264,6 +266,8 @@ void add_borrowing_pixels(const NerfModel& model, const Dataset& data, FieldQuer
             out.wo.push_back(wo[h]);
             out.target.push_back(target[i]);
             out.image.push_back(image[i]);
+            out.footprint.push_back(
+                pixel_footprint(data.cameras[image[i]], w2m, at[h], pixel[i][0], pixel[i][1]));
             out.donor.push_back(uint32_t(donor[h]));
             out.draw.push_back(at[h]);
             for (size_t m = 0; m + 1 < draws; ++m) {
@@ -277,6 +281,19 @@ void add_borrowing_pixels(const NerfModel& model, const Dataset& data, FieldQuer
 }
 
 }  // namespace
+
+PixelFootprint pixel_footprint(const Camera& camera, const Mat4& w2m, Vec3 p, float px, float py) {
+    const Mat4& c2w = camera.camera_to_world;
+    const auto axis = [&](Vec3 a) { return w2m.transform_vector(c2w.transform_vector(a)); };
+    const Vec3 origin = w2m.transform_point(c2w.transform_point(Vec3(0.0f, 0.0f, 0.0f)));
+    const Vec3 forward = axis(Vec3(0.0f, 0.0f, -1.0f));
+    const float depth = dot(p - origin, forward) / dot(forward, forward);  // the camera's z
+    PixelFootprint f;
+    f.u = axis(Vec3(1.0f, 0.0f, 0.0f)) * (depth / camera.fx);
+    f.v = axis(Vec3(0.0f, -1.0f, 0.0f)) * (depth / camera.fy);
+    f.corner = -(f.u * (px - std::floor(px)) + f.v * (py - std::floor(py)));
+    return f;
+}
 
 RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& data, FieldQuery& query,
                                       const RelightSampleSettings& settings,
@@ -377,6 +394,7 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
     out.normal.resize(n);
     out.target.resize(n);
     out.image.resize(n);
+    out.footprint.resize(n);
     out.dir.resize(n * K);
     out.visibility.resize(n * K);
     out.indirect.resize(n * K);
@@ -387,6 +405,7 @@ RelightSamples gather_relight_samples(const NerfModel& model, const Dataset& dat
         out.normal[j] = p.normal;
         out.target[j] = p.target;
         out.image[j] = p.image;
+        out.footprint[j] = pixel_footprint(data.cameras[p.image], w2m, p.position, p.pixel.px, p.pixel.py);
     }
     draw_more_events(model, query, points, found, rngs, settings.event_draws, out);
     out.normal = smooth_normals(out.position, out.normal, settings.normal_smoothing);

@@ -49,6 +49,14 @@ struct RelightSampleSettings {
     uint64_t seed = 1;
 };
 
+// A training pixel's square around a sample's event, model space: the event is at corner + x u + y v, (x, y)
+// where its camera ray crosses the pixel (each in [0, 1)); u and v are one pixel's step right and down at the
+// event's depth. The photo's pixel is the object averaged over that square, so the fit can average the fields
+// over it too (RelightTrainSettings::footprint_queries) instead of blurring them by it.
+struct PixelFootprint {
+    Vec3 corner{0.0f, 0.0f, 0.0f}, u{0.0f, 0.0f, 0.0f}, v{0.0f, 0.0f, 0.0f};
+};
+
 struct RelightSamples {
     int directions = 0;
     // Per point, model space.
@@ -60,6 +68,7 @@ struct RelightSamples {
     std::vector<Vec3> normal;  // lit points: the surface normal (settings.normals), unit, turned toward wo
     std::vector<Rgb> target;   // the pixel's colour, linear
     std::vector<uint32_t> image;  // training image index
+    std::vector<PixelFootprint> footprint;  // the pixel's square, relative to `position`
     // Per point and direction ([point * directions + k]).
     std::vector<Vec3> dir;  // unit, model space
     std::vector<float>
@@ -99,6 +108,10 @@ struct RelightSamples {
                    : position[s];
     }
 };
+
+// The square of pixel (px, py) (continuous pixel coordinates) of `camera` at the model-space point p, which
+// its ray meets: a pinhole's (the lens's distortion changes it by far less than a pixel).
+PixelFootprint pixel_footprint(const Camera& camera, const Mat4& world_to_model, Vec3 p, float px, float py);
 
 // Called with (points done, points wanted); from worker threads, never two calls at once.
 using RelightProgressFn = std::function<void(size_t, size_t)>;

@@ -97,6 +97,23 @@ inline BsdfSplit split_bsdf(float roughness, IntrinsicDiffuse diffuse, Vec3 wo, 
     return {f1 - f0, f0};
 }
 
+// places[1..J-1] (places[0] is the event draw about which they lie): J places on a stratified grid of sample
+// s's pixel square, each jittered in its cell, moved along the camera ray onto the plane of the surface
+// through places[0] (as the pixel's own rays would meet it); not moved where the ray grazes that plane.
+void footprint_places(const RelightSamples& S, uint32_t s, size_t J, Pcg32& rng, Vec3* places) {
+    const size_t g = J == 9 ? 3 : 2;
+    const PixelFootprint& f = S.footprint[s];
+    const Vec3 d = -S.wo[s], n = S.normal[S.light_of(s)];
+    const float dn = dot(d, n);
+    const Vec3 centre = places[0];
+    for (size_t j = 0; j < J; ++j) {
+        const float x = (float(j % g) + rng.next_float()) / float(g);
+        const float y = (float(j / g) + rng.next_float()) / float(g);
+        const Vec3 off = f.corner + f.u * x + f.v * y;
+        places[j] = centre + off + (std::fabs(dn) > 0.2f ? d * (-dot(off, n) / dn) : Vec3(0.0f));
+    }
+}
+
 }  // namespace
 
 RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const RelightSamples& samples,
@@ -112,6 +129,10 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
     if (settings.env_width < 2 || settings.env_height < 1 || settings.env_width > 4096 ||
         settings.env_height > 4096 || settings.batch < 1)
         throw Error("relight: the environment needs 2x1 to 4096x4096 texels and the batch one point");
+    const int fq = settings.footprint_queries;
+    if (fq != 1 && fq != 4 && fq != 9) throw Error("relight: footprint queries must be 1, 4 or 9");
+    if (fq > 1 && samples.footprint.size() != samples.size())
+        throw Error("relight: footprint queries need the samples' pixel squares");
     for (uint32_t img : samples.image)
         if (img >= image_count) throw Error("relight: a point refers to image " + std::to_string(img));
     if (settings.specular == SpecularEstimate::prefiltered || settings.diffuse == DiffuseEstimate::ratio) {
@@ -176,12 +197,16 @@ RelightStepStats RelightTrainer::compute_gradient() {
     const size_t batch = size_t(m_settings.batch);
     const float* params = m_params.data();
 
+    const size_t J = size_t(m_settings.footprint_queries);
     std::vector<uint32_t> pick(batch);
-    std::vector<Vec3> at(batch);  // where each picked point's fields are queried: one of its event draws
+    // Where each picked point's fields are queried: one of its event draws, or J places in its pixel's square
+    // about that draw ([i * J + j]).
+    std::vector<Vec3> at(batch * J);
     Pcg32 rng(mix64(m_settings.seed ^ 0x62617463ULL), step);
     for (size_t i = 0; i < batch; ++i) {
         pick[i] = rng.next_u32() % uint32_t(S.size());
-        at[i] = S.draw_position(pick[i], rng.next_u32());
+        at[i * J] = S.draw_position(pick[i], rng.next_u32());
+        if (J > 1) footprint_places(S, pick[i], J, rng, &at[i * J]);
     }
     std::vector<Rgb> env(n_env);
     for (size_t t = 0; t < n_env; ++t)
@@ -220,18 +245,19 @@ RelightStepStats RelightTrainer::compute_gradient() {
     tbb::parallel_for(size_t(0), n_chunks, [&](size_t c) {
         Chunk& ch = chunks[c];
         const size_t b = c * k_points_per_task, n = std::min(k_points_per_task, batch - b);
-        ch.enc.resize(n * dims);
-        ch.out.resize(n * k_intrinsic_outputs);
-        ch.d_out.assign(n * k_intrinsic_outputs, 0.0f);
-        ch.d_enc.resize(n * dims);
+        const size_t rows = n * J;
+        ch.enc.resize(rows * dims);
+        ch.out.resize(rows * k_intrinsic_outputs);
+        ch.d_out.assign(rows * k_intrinsic_outputs, 0.0f);
+        ch.d_enc.resize(rows * dims);
         ch.d_mlp.assign(mlp_params, 0.0f);
         ch.d_env.assign(n_env * 3, 0.0f);
         ch.d_exposure.assign(m_images, 0.0f);
         if (prefiltered) ch.d_levels.assign(env_levels.size(), Rgb(0.0f));
-        for (size_t i = 0; i < n; ++i)
+        for (size_t i = 0; i < rows; ++i)
             hash_encode(m_layout.grid, levels, params + m_layout.grid_offset,
-                        m_layout.grid_position(at[b + i]), &ch.enc[i * dims]);
-        mlp_forward_batch(shape, params + m_layout.mlp_offset, ch.enc.data(), n, ch.out.data(), &ch.acts);
+                        m_layout.grid_position(at[b * J + i]), &ch.enc[i * dims]);
+        mlp_forward_batch(shape, params + m_layout.mlp_offset, ch.enc.data(), rows, ch.out.data(), &ch.acts);
         std::vector<Rgb> lin;
         std::vector<float> wk, gk;
         std::vector<uint32_t> dirs;  // the [point * K + k] indices of the directions a sample is shaded with
@@ -244,9 +270,19 @@ RelightStepStats RelightTrainer::compute_gradient() {
             wk.resize(KP);
             gk.resize(KP);
             const float dir_weight = k_two_pi / float(KP);  // uniform over the hemisphere
-            const float* o = &ch.out[i * k_intrinsic_outputs];
-            float* d_o = &ch.d_out[i * k_intrinsic_outputs];
-            const IntrinsicSample is = intrinsic_from_outputs(o);
+            const float* o = &ch.out[i * J * k_intrinsic_outputs];
+            float* d_o = &ch.d_out[i * J * k_intrinsic_outputs];
+            // The albedo and roughness the pixel sees: the mean over its queries.
+            IntrinsicSample is = intrinsic_from_outputs(o);
+            if (J > 1) {
+                for (size_t j = 1; j < J; ++j) {
+                    const IntrinsicSample q = intrinsic_from_outputs(o + j * k_intrinsic_outputs);
+                    is.albedo += q.albedo;
+                    is.roughness += q.roughness;
+                }
+                is.albedo = is.albedo * (1.0f / float(J));
+                is.roughness /= float(J);
+            }
             // Shaded with the density normal, which the predicted normal learns to follow (its own loss
             // below): the photometric term then has an exact gradient and does not pull the normals toward
             // whatever explains a shadow or a texture.
@@ -360,19 +396,27 @@ RelightStepStats RelightTrainer::compute_gradient() {
             ch.se += se;
             // Albedo and roughness.
             float d_r = 0.0f, d_e = 0.0f;
+            Rgb d_albedo;  // dLoss / d(the mean albedo)
             for (int ch3 = 0; ch3 < 3; ++ch3) {
-                d_o[ch3] = d_c[ch3] * e * acc_d[ch3] * sigmoid_grad(is.albedo[ch3]);
+                d_albedo[ch3] = d_c[ch3] * e * acc_d[ch3];
                 d_r += d_c[ch3] * e *
                        (is.albedo[ch3] * (acc_d2[ch3] - acc_d[ch3]) + (acc_s2[ch3] - acc_s[ch3])) / dr;
                 d_e += d_c[ch3] * pred[ch3];  // dC/d(log e) = C
             }
-            const float sr = (r - k_min_roughness) / (1.0f - k_min_roughness);
             // The roughness prior: where the capture light says little about the roughness, it stays near
             // k_prior_roughness instead of drifting.
             const float dev = r - k_prior_roughness;
             ch.roughness_prior += double(m_settings.roughness_prior) * dev * dev;
             d_r += 2.0f * m_settings.roughness_prior * dev * inv_batch;
-            d_o[3] = d_r * (1.0f - k_min_roughness) * sigmoid_grad(sr);
+            // Through the mean to each query's sigmoids.
+            for (size_t j = 0; j < J; ++j) {
+                const IntrinsicSample q = J > 1 ? intrinsic_from_outputs(o + j * k_intrinsic_outputs) : is;
+                float* d_q = d_o + j * k_intrinsic_outputs;
+                for (int ch3 = 0; ch3 < 3; ++ch3)
+                    d_q[ch3] = d_albedo[ch3] * sigmoid_grad(q.albedo[ch3]) / float(J);
+                const float sr = (q.roughness - k_min_roughness) / (1.0f - k_min_roughness);
+                d_q[3] = d_r * (1.0f - k_min_roughness) * sigmoid_grad(sr) / float(J);
+            }
             ch.d_exposure[S.image[s]] += d_e;
             // The environment: the prefiltered texels the lobes read, then the texels each direction read
             // (env = exp(parameter): d_env is in parameter space, d_levels in radiance).
@@ -412,17 +456,21 @@ RelightStepStats RelightTrainer::compute_gradient() {
                         ch.d_env[size_t(taps.index[j]) * 3 + ch3] +=
                             d_le[ch3] * taps.weight[j] * env[taps.index[j]][ch3];
             }
-            // The normal output follows the density normal.
-            const Vec3 raw(o[4], o[5], o[6]);
-            const float len = std::max(length(raw), 1e-6f);
-            const Vec3 nh = raw / len;
-            const Vec3 diff = nh - S.normal[L];
-            ch.normal_loss += dot(diff, diff);
-            const Vec3 d_nh = diff * (2.0f * m_settings.normal_weight * inv_batch);
-            const Vec3 d_raw = (d_nh - nh * dot(nh, d_nh)) / len;
-            d_o[4] = d_raw.x;
-            d_o[5] = d_raw.y;
-            d_o[6] = d_raw.z;
+            // The normal output follows the density normal, at each query.
+            for (size_t j = 0; j < J; ++j) {
+                const float* oj = o + j * k_intrinsic_outputs;
+                float* d_q = d_o + j * k_intrinsic_outputs;
+                const Vec3 raw(oj[4], oj[5], oj[6]);
+                const float len = std::max(length(raw), 1e-6f);
+                const Vec3 nh = raw / len;
+                const Vec3 diff = nh - S.normal[L];
+                ch.normal_loss += dot(diff, diff) / float(J);
+                const Vec3 d_nh = diff * (2.0f * m_settings.normal_weight * inv_batch / float(J));
+                const Vec3 d_raw = (d_nh - nh * dot(nh, d_nh)) / len;
+                d_q[4] = d_raw.x;
+                d_q[5] = d_raw.y;
+                d_q[6] = d_raw.z;
+            }
         }
         mlp_backward_batch(shape, params + m_layout.mlp_offset, ch.enc.data(), ch.acts, ch.d_out.data(),
                            ch.d_mlp.data(), ch.d_enc.data());
@@ -436,8 +484,8 @@ RelightStepStats RelightTrainer::compute_gradient() {
     tbb::parallel_for(0, m_layout.grid.levels, [&](int l) {
         for (size_t c = 0; c < n_chunks; ++c) {
             const size_t b = c * k_points_per_task, n = std::min(k_points_per_task, batch - b);
-            for (size_t i = 0; i < n; ++i)
-                hash_level_backward(m_layout.grid, levels.level[l], l, m_layout.grid_position(at[b + i]),
+            for (size_t i = 0; i < n * J; ++i)
+                hash_level_backward(m_layout.grid, levels.level[l], l, m_layout.grid_position(at[b * J + i]),
                                     &chunks[c].d_enc[i * dims], grads + m_layout.grid_offset);
         }
     });

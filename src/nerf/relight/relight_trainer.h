@@ -62,6 +62,11 @@ struct RelightTrainSettings {
     // threshold (linear beyond it): each point's albedo then follows the median of its views more than their
     // mean, so a highlight that the fit's shading cannot explain, seen from a few views, moves it less.
     float huber_delta = 0.0f;
+    // Where each point's fields are queried: 1, at one event draw on its camera ray; N = 4 or 9, averaged
+    // over a 2x2 or 3x3 stratified grid of its pixel's square (RelightSamples::footprint), moved along the
+    // ray onto the surface's plane. A photo's pixel averages the object over that square: fitted at one place
+    // per pixel, the albedo is that average, blurred by the square once more when a camera renders it.
+    int footprint_queries = 1;
     bool learn_exposure = true;
     SpecularEstimate specular = SpecularEstimate::prefiltered;  // measured on dev: docs/benchmarks.md
     DiffuseEstimate diffuse = DiffuseEstimate::ratio;
