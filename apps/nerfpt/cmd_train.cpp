@@ -135,10 +135,11 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
         ->check(CLI::Range(0.0f, 1.0f));
     cmd->add_option(
            "--relight-footprint", args.relight.footprint_queries,
-           "Where the fit reads the fields for a training pixel: 1, at one point on its camera ray; 4 or "
-           "9, averaged over a 2x2 or 3x3 grid across the pixel's square on the surface, as the photo's "
-           "pixel averages the object (a sharper albedo, at that many times the fit's network work; "
-           "default: 1)")
+           fmt::format("Where the fit reads the fields for a training pixel: 1, at one point on its camera ray "
+                       "(which fits the albedo blurred by the pixel); 4 or 9, averaged over a 2x2 or 3x3 grid "
+                       "across the pixel's square on the surface, as the photo's pixel averages the object: a "
+                       "sharper albedo, at that many times the fit's network work (default: {})",
+                       k_relight_footprint))
         ->check(CLI::IsMember({1, 4, 9}));
     cmd->add_option("--relight-ground", args.relight.ground_share,
                     fmt::format("The capture light below the horizon starts at this share of the sky above it "

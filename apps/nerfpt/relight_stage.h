@@ -31,6 +31,10 @@ constexpr int k_relight_pixels_gpu = 2097152, k_relight_pixels_cpu = 262144;
 // of fitting (4: 0.3 dB). On an H100 with 16 directions, 8 bought 0.7 dB of albedo (4: 0.6 dB) for 5 s of
 // fitting; train + relight 103 s, inside the 120 s budget (docs/benchmarks.md, "pooled neighbours on a GPU").
 constexpr int k_relight_pool = 8;  // the same on both backends
+// Footprint queries (RelightTrainSettings::footprint_queries): on the CPU, averaging the fields over a 2x2 grid of
+// each training pixel's square bought 0.6 dB of albedo (fields) and 0.9 dB (render AOV), +0.2 dB relit, for 6 s
+// more fitting; 3x3 no more than 2x2 (docs/benchmarks.md, "each pixel's square").
+constexpr int k_relight_footprint = 4;  // the same on both backends
 
 struct RelightStageOptions {
     uint64_t steps = 1500;  // optimiser steps of the stage
@@ -46,7 +50,7 @@ struct RelightStageOptions {
     float roughness_prior = nerf::RelightTrainSettings{}.roughness_prior;
     float huber_delta = nerf::RelightTrainSettings{}.huber_delta;
     float ground_share = nerf::RelightTrainSettings{}.ground_share;
-    int footprint_queries = nerf::RelightTrainSettings{}.footprint_queries;
+    int footprint_queries = k_relight_footprint;
     int borrowing_pixels = -1;  // -1: k_relight_pixels_* of the backend
     int pooled_neighbours = k_relight_pool;
     int table_log2 =
