@@ -97,9 +97,9 @@ inline BsdfSplit split_bsdf(float roughness, IntrinsicDiffuse diffuse, Vec3 wo, 
     return {f1 - f0, f0};
 }
 
-// places[1..J-1] (places[0] is the event draw about which they lie): J places on a stratified grid of sample
-// s's pixel square, each jittered in its cell, moved along the camera ray onto the plane of the surface
-// through places[0] (as the pixel's own rays would meet it); not moved where the ray grazes that plane.
+// places[0..J-1] from places[0], the event draw they lie about: J places on a stratified grid of sample s's
+// pixel square, each jittered in its cell, moved along the camera ray onto the plane of the surface through
+// the draw (as the pixel's own rays would meet it); not moved where the ray grazes that plane.
 void footprint_places(const RelightSamples& S, uint32_t s, size_t J, Pcg32& rng, Vec3* places) {
     const size_t g = J == 9 ? 3 : 2;
     const PixelFootprint& f = S.footprint[s];
@@ -274,15 +274,13 @@ RelightStepStats RelightTrainer::compute_gradient() {
             float* d_o = &ch.d_out[i * J * k_intrinsic_outputs];
             // The albedo and roughness the pixel sees: the mean over its queries.
             IntrinsicSample is = intrinsic_from_outputs(o);
-            if (J > 1) {
-                for (size_t j = 1; j < J; ++j) {
-                    const IntrinsicSample q = intrinsic_from_outputs(o + j * k_intrinsic_outputs);
-                    is.albedo += q.albedo;
-                    is.roughness += q.roughness;
-                }
-                is.albedo = is.albedo * (1.0f / float(J));
-                is.roughness /= float(J);
+            for (size_t j = 1; j < J; ++j) {
+                const IntrinsicSample q = intrinsic_from_outputs(o + j * k_intrinsic_outputs);
+                is.albedo += q.albedo;
+                is.roughness += q.roughness;
             }
+            is.albedo = is.albedo * (1.0f / float(J));
+            is.roughness /= float(J);
             // Shaded with the density normal, which the predicted normal learns to follow (its own loss
             // below): the photometric term then has an exact gradient and does not pull the normals toward
             // whatever explains a shadow or a texture.

@@ -1,19 +1,20 @@
 // The relight stage: fits the intrinsic fields (albedo, roughness, normal: intrinsic_field.h), the capture
-// environment and an exposure per image to the training pixels, with the trained NeRF's density fixed. For each
-// point of RelightSamples the predicted colour is
+// environment and an exposure per image to the training pixels, with the trained NeRF's density fixed. For
+// each point of RelightSamples the predicted colour is
 //   C = e_image * [(2 pi / K) sum_k (V_k L_env(w_k) + R_k) a f_d(r, n; w_o, w_k) max(0, n . w_k) + S]
 // (Monte Carlo over the hemisphere with the precomputed visibility V and the NeRF's indirect light R; the K
 // directions are the point's own and its pooled neighbours': RelightSamples::light_directions), with a f_d
-// + f_s the relit renderer's BSDF (intrinsic_bsdf, with the settings' diffuse lobe: Burley's depends on r) in the
-// frame of the density normal n, and S its specular part. With SpecularEstimate::prefiltered (the default,
-// specular_prefilter.h) S is the split sum E_s(mu_o, r) (V_r L_r + R_r) about the mirror direction, L_r the
-// environment prefiltered with the lobe's width; with SpecularEstimate::sampled the same sum over the K directions
-// with f_s. The diffuse part is a ratio estimator (DiffuseEstimate::ratio, the default: the cosine-prefiltered
-// unshadowed light times the share the K directions find unshadowed, exact where nothing is in the way) or the sum
-// over the K directions (DiffuseEstimate::sampled).
-// Compared with the pixel in sRGB
-// (squared error). The normal output learns the density normal by its own loss: the renderer shades with it. Albedo against light has a per-channel scale no image can fix: the prior is
-// an environment whose mean is grey (equal mean log radiance in R, G and B), and exposures whose mean log is 0.
+// + f_s the relit renderer's BSDF (intrinsic_bsdf, with the settings' diffuse lobe: Burley's depends on r) in
+// the frame of the density normal n, and S its specular part; a and r are the means over the places the
+// point's pixel is queried at (RelightTrainSettings::footprint_queries). With SpecularEstimate::prefiltered
+// (the default, specular_prefilter.h) S is the split sum E_s(mu_o, r) (V_r L_r + R_r) about the mirror
+// direction, L_r the environment prefiltered with the lobe's width; with SpecularEstimate::sampled the same
+// sum over the K directions with f_s. The diffuse part is a ratio estimator (DiffuseEstimate::ratio, the
+// default: the cosine-prefiltered unshadowed light times the share the K directions find unshadowed, exact
+// where nothing is in the way) or the sum over the K directions (DiffuseEstimate::sampled). Compared with the
+// pixel in sRGB (squared error). The normal output learns the density normal by its own loss: the renderer
+// shades with it. Albedo against light has a per-channel scale no image can fix: the prior is an environment
+// whose mean is grey (equal mean log radiance in R, G and B), and exposures whose mean log is 0.
 #pragma once
 
 #include <cstdint>
