@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -42,20 +43,33 @@ int64_t cut_table_layer(const std::vector<float>& density, float occupied_thresh
     };
     const float dense =
         float(occupancy_density_for_opacity(std::min(s.footprint_opacity, 0.999), 1.0, int(R), in.min_step));
+    // The dense cells above the layer; with a slab, only those within it of the lowest one (the object's foot).
+    const auto dense_above = [&](size_t i, const Vec3& o) {
+        return in_region[i] && density[i] >= dense && density[i] > occupied_threshold && o.z >= layer;
+    };
+    float lowest = std::numeric_limits<float>::infinity();
+    for (int64_t z = 0; z < R; ++z)
+        for (int64_t y = 0; y < R; ++y)
+            for (int64_t x = 0; x < R; ++x) {
+                const Vec3 o = object_centre(in, x, y, z);
+                if (dense_above(size_t(x + y * R + z * R * R), o)) lowest = std::min(lowest, o.z);
+            }
+    // Nothing dense above the layer: the rule has no footprint to keep, so it cuts nothing.
+    if (!std::isfinite(lowest)) return 0;
+    const float top = s.footprint_slab_cells > 0 ? lowest + float(s.footprint_slab_cells) * cell0
+                                                 : std::numeric_limits<float>::infinity();
     std::vector<uint8_t> marked(size_t(nx * ny), 0);
     bool any = false;
     for (int64_t z = 0; z < R; ++z)
         for (int64_t y = 0; y < R; ++y)
             for (int64_t x = 0; x < R; ++x) {
-                const size_t i = size_t(x + y * R + z * R * R);
-                if (!in_region[i] || !(density[i] >= dense) || !(density[i] > occupied_threshold)) continue;
                 const Vec3 o = object_centre(in, x, y, z);
                 int64_t px, py;
-                if (o.z < layer || !pixel(o, px, py)) continue;
+                if (!dense_above(size_t(x + y * R + z * R * R), o) || o.z > top || !pixel(o, px, py)) continue;
                 marked[size_t(px + py * nx)] = 1;
                 any = true;
             }
-    if (!any) return 0;  // nothing dense above the layer: the rule has no footprint to keep, so it cuts nothing
+    if (!any) return 0;
     // Widened by the margin plus the half extent of a cell (a cell centre marks its whole cell).
     const float reach = margin + 0.5f * std::max(extent.x, extent.y) * (1.0f / float(R));
     const int64_t r = int64_t(std::ceil(reach / spacing));

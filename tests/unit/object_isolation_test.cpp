@@ -186,6 +186,44 @@ TEST(ObjectIsolation, TheTableLayerKeepsOnlyTheObjectsFootprint) {
             EXPECT_GT(slab_only[i], 0) << "table cell " << i << " cut with no footprint above it";
 }
 
+// A mushroom on the table: a stem (radius 0.06) under a cap (radius 0.2) from 6 cells above the layer. The
+// footprint is the foot's (the dense cells within 4 cells of the lowest above the layer): the table under the
+// cap's overhang goes. Taken from every dense cell above the layer (slab 0, the first rule) it stays.
+bool in_stem(Vec3 p) { return axis_distance(p) < 0.06f && p.z > 0.29f && p.z < 0.55f; }
+bool in_cap(Vec3 p) { return axis_distance(p) < 0.2f && p.z > 0.55f && p.z < 0.65f; }
+
+TEST(ObjectIsolation, TheFootprintIsTheFootsNotTheOverhangs) {
+    const float cell = 1.0f / k_res;
+    IsolationInput in = input();
+    in.min_step = 1.0f / (2.0f * k_res);  // density 1: dense
+    const auto mushroom = [](Vec3 p) { return in_table_layer(p) || in_stem(p) || in_cap(p); };
+    std::vector<float> d = grid_of(mushroom);
+    const IsolationSettings s;
+    ASSERT_EQ(s.footprint_slab_cells, 4.0);
+    isolate_object(d, in, s);
+    int64_t under_cap = 0, kept_under_cap = 0;
+    for (size_t i = 0; i < d.size(); ++i) {
+        const Vec3 p = centre_of(int64_t(i));
+        if (in_stem(p) || in_cap(p)) EXPECT_GT(d[i], 0) << "mushroom cell " << i << " cut";
+        // Under the cap, beyond the stem's footprint and its reach (as in the test above: 2.25 cells).
+        if (in_table_layer(p) && !in_stem(p) && axis_distance(p) > 0.06f + 2.25f * cell && axis_distance(p) < 0.2f) {
+            ++under_cap;
+            kept_under_cap += d[i] > 0;
+        }
+    }
+    EXPECT_GT(under_cap, 50);
+    EXPECT_EQ(kept_under_cap, 0);
+
+    IsolationSettings all_above = s;
+    all_above.footprint_slab_cells = 0;
+    std::vector<float> d_all = grid_of(mushroom);
+    isolate_object(d_all, in, all_above);
+    for (size_t i = 0; i < d_all.size(); ++i) {
+        const Vec3 p = centre_of(int64_t(i));
+        if (in_table_layer(p) && axis_distance(p) < 0.2f - 0.5f * cell) EXPECT_GT(d_all[i], 0) << "cell " << i;
+    }
+}
+
 TEST(ObjectIsolation, RefusesAGridOfTheWrongSize) {
     std::vector<float> d(100, 1.0f);
     EXPECT_THROW(isolate_object(d, input(), IsolationSettings{}), Error);
