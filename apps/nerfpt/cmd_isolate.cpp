@@ -19,9 +19,9 @@ CLI::App* add_isolate_command(CLI::App& app, IsolateArgs& args) {
         "The model must carry an object frame (`nerfpt capture` stores it). Every occupancy cell that does not\n"
         "overlap the object's box, or lies wholly below --plane-margin cells above the supporting plane, is\n"
         "emptied; in the table layer (--table-layer cells above the plane, where the table's own density\n"
-        "reaches) only the cells under the object's footprint stay (its foot: the cells above the layer at\n"
-        "least --footprint-opacity opaque and within --footprint-slab cells of the lowest of them, seen from\n"
-        "above, widened by --footprint-margin cells); then every\n"
+        "reaches) only the cells under the object's footprint stay (its foot: the cells above the layer\n"
+        "at least --footprint-opacity opaque and within --footprint-slab cells of the lowest of them,\n"
+        "seen from above, widened by --footprint-margin cells); then every\n"
         "26-connected component of occupied cells but the largest with fewer than --min-component cells.\n"
         "Renders skip empty cells, so the table, the props and the floaters vanish, and the model is marked\n"
         "object-only: eval, view and bake then show only what lies in its box, cut exactly at the box and\n"
@@ -44,9 +44,10 @@ CLI::App* add_isolate_command(CLI::App& app, IsolateArgs& args) {
                     "How far the footprint reaches beyond the object's dense cells, in cells")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber);
-    cmd->add_option("--footprint-slab", args.settings.footprint_slab_cells,
-                    "The footprint is the object's foot: its dense cells within this many cells above its lowest "
-                    "dense cell over the table layer, seen from above (0: every dense cell above the layer)")
+    cmd->add_option(
+           "--footprint-slab", args.settings.footprint_slab_cells,
+           "The footprint is the object's foot: its dense cells within this many cells above its lowest "
+           "dense cell over the table layer, seen from above (0: every dense cell above the layer)")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--footprint-opacity", args.settings.footprint_opacity,
