@@ -43,7 +43,8 @@ int64_t cut_table_layer(const std::vector<float>& density, float occupied_thresh
     };
     const float dense =
         float(occupancy_density_for_opacity(std::min(s.footprint_opacity, 0.999), 1.0, int(R), in.min_step));
-    // The dense cells above the layer; with a slab, only those within it of the lowest one (the object's foot).
+    // The dense cells above the layer; with a slab, only those within it of the lowest one (the object's
+    // foot).
     const auto dense_above = [&](size_t i, const Vec3& o) {
         return in_region[i] && density[i] >= dense && density[i] > occupied_threshold && o.z >= layer;
     };
@@ -65,7 +66,8 @@ int64_t cut_table_layer(const std::vector<float>& density, float occupied_thresh
             for (int64_t x = 0; x < R; ++x) {
                 const Vec3 o = object_centre(in, x, y, z);
                 int64_t px, py;
-                if (!dense_above(size_t(x + y * R + z * R * R), o) || o.z > top || !pixel(o, px, py)) continue;
+                if (!dense_above(size_t(x + y * R + z * R * R), o) || o.z > top || !pixel(o, px, py))
+                    continue;
                 marked[size_t(px + py * nx)] = 1;
                 any = true;
             }

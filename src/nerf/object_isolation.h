@@ -35,9 +35,9 @@ struct IsolationSettings {
     double footprint_opacity = 0.5;
     double footprint_margin_cells = 1.0;
     // The footprint is the projection of the dense cells within this many cells above the lowest dense cell
-    // above the layer (the object's foot), not of every dense cell above it: an object wider above than at its
-    // foot (a vase's belly, a mushroom's cap) kept the table under its overhang (docs/benchmarks.md, "the foot's
-    // footprint"). 0: every dense cell above the layer.
+    // above the layer (the object's foot), not of every dense cell above it: an object wider above than at
+    // its foot (a vase's belly, a mushroom's cap) kept the table under its overhang (docs/benchmarks.md, "the
+    // foot's footprint"). 0: every dense cell above the layer.
     double footprint_slab_cells = 4.0;
 };
 

@@ -206,7 +206,8 @@ TEST(ObjectIsolation, TheFootprintIsTheFootsNotTheOverhangs) {
         const Vec3 p = centre_of(int64_t(i));
         if (in_stem(p) || in_cap(p)) EXPECT_GT(d[i], 0) << "mushroom cell " << i << " cut";
         // Under the cap, beyond the stem's footprint and its reach (as in the test above: 2.25 cells).
-        if (in_table_layer(p) && !in_stem(p) && axis_distance(p) > 0.06f + 2.25f * cell && axis_distance(p) < 0.2f) {
+        if (in_table_layer(p) && !in_stem(p) && axis_distance(p) > 0.06f + 2.25f * cell &&
+            axis_distance(p) < 0.2f) {
             ++under_cap;
             kept_under_cap += d[i] > 0;
         }
@@ -220,7 +221,8 @@ TEST(ObjectIsolation, TheFootprintIsTheFootsNotTheOverhangs) {
     isolate_object(d_all, in, all_above);
     for (size_t i = 0; i < d_all.size(); ++i) {
         const Vec3 p = centre_of(int64_t(i));
-        if (in_table_layer(p) && axis_distance(p) < 0.2f - 0.5f * cell) EXPECT_GT(d_all[i], 0) << "cell " << i;
+        if (in_table_layer(p) && axis_distance(p) < 0.2f - 0.5f * cell)
+            EXPECT_GT(d_all[i], 0) << "cell " << i;
     }
 }
 
