@@ -256,6 +256,20 @@ RelightSamples synthetic_samples(int points, int K, bool shadows) {
     return s;
 }
 
+// Pixel squares (RelightSamples::footprint) of `side` model units across each sample's camera ray, the ray
+// crossing each at a random place.
+void add_pixel_squares(RelightSamples& s, float side, Pcg32 rng) {
+    s.footprint.clear();
+    for (size_t i = 0; i < s.size(); ++i) {
+        const Frame f = Frame::from_z(s.wo[i]);
+        PixelFootprint fp;
+        fp.u = f.to_world(Vec3(side, 0.0f, 0.0f));
+        fp.v = f.to_world(Vec3(0.0f, side, 0.0f));
+        fp.corner = -(fp.u * rng.next_float() + fp.v * rng.next_float());
+        s.footprint.push_back(fp);
+    }
+}
+
 // Every pairing of the shading estimators (relight_trainer.h): the sums over the directions, the diffuse ratio,
 // the specular split sum.
 void expect_gradient_matches_finite_differences(SpecularEstimate estimate, DiffuseEstimate diffuse,
@@ -265,15 +279,7 @@ void expect_gradient_matches_finite_differences(SpecularEstimate estimate, Diffu
     const NerfModel m = small_model();
     RelightSamples s = synthetic_samples(64, 8, true);
     // Pixel squares a few grid cells wide, so that the footprint's queries read different entries.
-    Pcg32 frng(5, 6);
-    for (size_t i = 0; i < s.size() && footprint > 1; ++i) {
-        const Frame f = Frame::from_z(s.wo[i]);
-        PixelFootprint fp;
-        fp.u = f.to_world(Vec3(0.03f, 0.0f, 0.0f));
-        fp.v = f.to_world(Vec3(0.0f, 0.03f, 0.0f));
-        fp.corner = -(fp.u * frng.next_float() + fp.v * frng.next_float());
-        s.footprint.push_back(fp);
-    }
+    if (footprint > 1) add_pixel_squares(s, 0.03f, Pcg32(5, 6));
     // Pooled neighbours (any lit points will do for the gradient; some lists end early), whose directions
     // partly fall below a point's horizon.
     s.neighbours = pooled;
@@ -553,14 +559,9 @@ TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
 TEST(RelightTrainer, TheFootprintAverageUndoesThePixelsBlur) {
     const NerfModel m = small_model();
     RelightSamples s = synthetic_samples(2048, 16, true);
-    Pcg32 rng(9, 10);
+    add_pixel_squares(s, 0.04f, Pcg32(9, 10));
     for (size_t i = 0; i < s.size(); ++i) {
-        const Frame f = Frame::from_z(s.wo[i]);
-        PixelFootprint fp;
-        fp.u = f.to_world(Vec3(0.04f, 0.0f, 0.0f));
-        fp.v = f.to_world(Vec3(0.0f, 0.04f, 0.0f));
-        fp.corner = -(fp.u * rng.next_float() + fp.v * rng.next_float());
-        s.footprint.push_back(fp);
+        const PixelFootprint& fp = s.footprint[i];
         const Vec3 d = -s.wo[i], n = s.normal[i];
         Rgb mean(0.0f);
         for (int y = 0; y < 6; ++y)

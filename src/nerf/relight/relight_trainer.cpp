@@ -130,6 +130,7 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
         settings.env_height > 4096 || settings.batch < 1)
         throw Error("relight: the environment needs 2x1 to 4096x4096 texels and the batch one point");
     const int fq = settings.footprint_queries;
+    static_assert(k_max_footprint_queries == 9, "footprint_places lays 4 or 9 places out");
     if (fq != 1 && fq != 4 && fq != 9) throw Error("relight: footprint queries must be 1, 4 or 9");
     if (fq > 1 && samples.footprint.size() != samples.size())
         throw Error("relight: footprint queries need the samples' pixel squares");
@@ -273,11 +274,12 @@ RelightStepStats RelightTrainer::compute_gradient() {
             const float* o = &ch.out[i * J * k_intrinsic_outputs];
             float* d_o = &ch.d_out[i * J * k_intrinsic_outputs];
             // The albedo and roughness the pixel sees: the mean over its queries.
-            IntrinsicSample is = intrinsic_from_outputs(o);
+            IntrinsicSample q[k_max_footprint_queries];
+            for (size_t j = 0; j < J; ++j) q[j] = intrinsic_from_outputs(o + j * k_intrinsic_outputs);
+            IntrinsicSample is = q[0];
             for (size_t j = 1; j < J; ++j) {
-                const IntrinsicSample q = intrinsic_from_outputs(o + j * k_intrinsic_outputs);
-                is.albedo += q.albedo;
-                is.roughness += q.roughness;
+                is.albedo += q[j].albedo;
+                is.roughness += q[j].roughness;
             }
             is.albedo = is.albedo * (1.0f / float(J));
             is.roughness /= float(J);
@@ -408,11 +410,10 @@ RelightStepStats RelightTrainer::compute_gradient() {
             d_r += 2.0f * m_settings.roughness_prior * dev * inv_batch;
             // Through the mean to each query's sigmoids.
             for (size_t j = 0; j < J; ++j) {
-                const IntrinsicSample q = J > 1 ? intrinsic_from_outputs(o + j * k_intrinsic_outputs) : is;
                 float* d_q = d_o + j * k_intrinsic_outputs;
                 for (int ch3 = 0; ch3 < 3; ++ch3)
-                    d_q[ch3] = d_albedo[ch3] * sigmoid_grad(q.albedo[ch3]) / float(J);
-                const float sr = (q.roughness - k_min_roughness) / (1.0f - k_min_roughness);
+                    d_q[ch3] = d_albedo[ch3] * sigmoid_grad(q[j].albedo[ch3]) / float(J);
+                const float sr = (q[j].roughness - k_min_roughness) / (1.0f - k_min_roughness);
                 d_q[3] = d_r * (1.0f - k_min_roughness) * sigmoid_grad(sr) / float(J);
             }
             ch.d_exposure[S.image[s]] += d_e;

@@ -39,6 +39,8 @@ enum class SpecularEstimate { prefiltered, sampled };
 // unshadowed light from the prefiltered environment times the share of it the K directions find unshadowed.
 enum class DiffuseEstimate { ratio, sampled };
 
+constexpr int k_max_footprint_queries = 9;  // RelightTrainSettings::footprint_queries: 1, 4 or 9
+
 struct RelightTrainSettings {
     IntrinsicConfig intrinsic;
     int env_width = 32, env_height = 16;
