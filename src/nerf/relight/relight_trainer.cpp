@@ -22,11 +22,11 @@ constexpr size_t k_points_per_task = 128;            // points per parallel task
 constexpr float k_roughness_step = 0.01f;  // finite difference of the BSDF in roughness
 constexpr float k_prior_roughness = 0.5f;  // where RelightTrainSettings::roughness_prior pulls
 
-OptimizerConfig relight_optimizer(float lr) {
+OptimizerConfig relight_optimizer(const RelightTrainSettings& settings) {
     OptimizerConfig c;
-    c.learning_rate = lr;
+    c.learning_rate = settings.learning_rate;
     c.decay_start = 1 << 30;  // no decay: the stage is short
-    c.ema_decay = 0.95f;
+    c.ema_decay = settings.average_decay;
     return c;
 }
 
@@ -122,13 +122,15 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
       m_settings(settings),
       m_layout(make_intrinsic_layout(settings.intrinsic, model.aabb_scale)),
       m_images(image_count),
-      m_adam(relight_optimizer(settings.learning_rate), 0, 0, 0) {
+      m_adam(relight_optimizer(settings), 0, 0, 0) {
     if (samples.size() == 0) throw Error("relight: no surface points to train on");
     if (!(settings.huber_delta >= 0.0f) || !std::isfinite(settings.huber_delta))
         throw Error("relight: the Huber threshold must be finite and >= 0");
     if (settings.env_width < 2 || settings.env_height < 1 || settings.env_width > 4096 ||
         settings.env_height > 4096 || settings.batch < 1)
         throw Error("relight: the environment needs 2x1 to 4096x4096 texels and the batch one point");
+    if (!(settings.average_decay >= 0.0f && settings.average_decay < 1.0f))
+        throw Error("relight: the parameters' average decay must be in [0, 1)");
     const int fq = settings.footprint_queries;
     static_assert(k_max_footprint_queries == 9, "footprint_places lays 4 or 9 places out");
     if (fq != 1 && fq != 4 && fq != 9) throw Error("relight: footprint queries must be 1, 4 or 9");
@@ -171,8 +173,7 @@ RelightTrainer::RelightTrainer(const NerfModel& model, size_t image_count, const
             float* texel = &m_params[m_env_offset + (size_t(j) * settings.env_width + size_t(i)) * 3];
             std::fill_n(texel, 3, below ? env0 + ground : env0);
         }
-    m_adam =
-        Adam(relight_optimizer(settings.learning_rate), m_total, m_layout.mlp_offset, m_layout.grid_offset);
+    m_adam = Adam(relight_optimizer(settings), m_total, m_layout.mlp_offset, m_layout.grid_offset);
 }
 
 RelightStepStats RelightTrainer::step() {

@@ -46,6 +46,13 @@ struct RelightTrainSettings {
     int env_width = 32, env_height = 16;
     int batch = 1024;               // points per step
     float learning_rate = 1e-2f;
+    // The fields the stage delivers are the moving average of its parameters over the steps, weighted by this
+    // factor per step: 0.99 averages over the last ~100 steps, 0.95 (tiny-cuda-nn's, the NeRF trainer's) over
+    // ~20. A parameter is set by the few batches that reach its hash entries, each moving it by about the
+    // learning rate (Adam's steps do not shrink with the gradient), so the last steps' noise stays in it
+    // unless many are averaged: 0.99 gave +0.25 dB of albedo and 0.2 degrees of normal on the CPU's dev model
+    // over three seeds (docs/benchmarks.md, "the fields' average").
+    float average_decay = 0.99f;
     float normal_weight = 0.3f;     // weight of |n_pred - n_density|^2 against the photometric loss
     float grey_weight = 1.0f;       // the grey-environment prior
     // The environment's texels below the training world's horizon (+z up, as `poses` and NeRF-synthetic write
