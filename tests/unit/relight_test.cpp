@@ -561,10 +561,16 @@ TEST(RelightTrainer, RecoversAKnownAlbedoUpToOneScalePerChannel) {
     EXPECT_LT(normal_err / double(n) * 57.29578, 5.0);  // degrees
 }
 
-// Targets of pixels that average the albedo over their squares (as a photo's do): the square's mean albedo
-// from a 6x6 grid on the tangent plane, where the pixel's own rays meet it (moved as the fit moves its
-// places: not where the ray grazes the plane), in place of the albedo at the point.
-void average_targets_over_pixel_squares(RelightSamples& s) {
+// Pixels that average the albedo over their squares (as a photo's do), fitted with the fields read at one
+// place per pixel and averaged over 2x2 places: the second recovers the albedo itself, the first its blur.
+// Squares of 0.04 units across the rays to the sphere of synthetic_samples (the texture's period is
+// 0.16-0.2), targets made with the square's mean albedo from a 6x6 grid on the tangent plane, where the
+// pixel's own rays meet it (moved as the fit moves its places: not where the ray grazes the plane). The
+// blurred targets' albedo is 17% (RMS) from the sharp one.
+TEST(RelightTrainer, TheFootprintAverageUndoesThePixelsBlur) {
+    const NerfModel m = small_model();
+    RelightSamples s = synthetic_samples(2048, 16, true);
+    add_pixel_squares(s, 0.04f, Pcg32(9, 10));
     for (size_t i = 0; i < s.size(); ++i) {
         const PixelFootprint& fp = s.footprint[i];
         const Vec3 d = -s.wo[i], n = s.normal[i];
@@ -595,19 +601,6 @@ void average_targets_over_pixel_squares(RelightSamples& s) {
         }
         for (int c = 0; c < 3; ++c) s.target[i][c] = spec[c] + (s.target[i][c] - spec[c]) * mean[c] / a[c];
     }
-}
-
-// Pixels that average the albedo over their squares (as a photo's do), fitted with the fields read at one
-// place per pixel and averaged over 2x2 places: the second recovers the albedo itself, the first its blur.
-// Squares of 0.04 units across the rays to the sphere of synthetic_samples (the texture's period is
-// 0.16-0.2), targets made with the square's mean albedo from a 6x6 grid on the tangent plane, where the
-// pixel's own rays meet it (moved as the fit moves its places: not where the ray grazes the plane). The
-// blurred targets' albedo is 17% (RMS) from the sharp one.
-TEST(RelightTrainer, TheFootprintAverageUndoesThePixelsBlur) {
-    const NerfModel m = small_model();
-    RelightSamples s = synthetic_samples(2048, 16, true);
-    add_pixel_squares(s, 0.04f, Pcg32(9, 10));
-    average_targets_over_pixel_squares(s);
     double err[2];
     for (int j = 0; j < 2; ++j) {
         RelightTrainSettings ts = recovery_settings(SpecularEstimate::sampled);
@@ -630,24 +623,18 @@ TEST(RelightTrainer, TheFootprintAverageUndoesThePixelsBlur) {
 TEST(RelightTrainer, TheFieldsAreTheParametersAverage) {
     const NerfModel m = small_model();
     const RelightSamples s = synthetic_samples(512, 8, true);
-    std::vector<float> fields[3];
     const float decays[3] = {0.0f, 0.95f, 0.99f};
-    std::vector<float> last;
+    double dist[3] = {0, 0, 0};  // of the fields from the last step's parameters
     for (int j = 0; j < 3; ++j) {
         RelightTrainSettings ts = recovery_settings(SpecularEstimate::sampled);
         ts.average_decay = decays[j];
         RelightTrainer tr(m, 2, s, ts);
         for (int i = 0; i < 200; ++i) tr.step();
-        fields[j] = tr.fields(1.0).params;
-        last = tr.raw_params();
+        const std::vector<float> fields = tr.fields(1.0).params;
+        ASSERT_EQ(fields.size(), size_t(tr.layout().total));
+        for (size_t i = 0; i < fields.size(); ++i)
+            dist[j] += std::fabs(double(fields[i]) - tr.raw_params()[i]);
     }
-    const size_t n = fields[0].size();
-    ASSERT_EQ(
-        n, size_t(make_intrinsic_layout(recovery_settings(SpecularEstimate::sampled).intrinsic, m.aabb_scale)
-                      .total));
-    double dist[3] = {0, 0, 0};  // from the last step's parameters
-    for (int j = 0; j < 3; ++j)
-        for (size_t i = 0; i < n; ++i) dist[j] += std::fabs(double(fields[j][i]) - last[i]);
     EXPECT_EQ(dist[0], 0.0);
     EXPECT_GT(dist[1], 0.0);
     EXPECT_GT(dist[2], dist[1]);
