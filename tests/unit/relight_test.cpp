@@ -611,8 +611,8 @@ TEST(RelightTrainer, TheFootprintAverageUndoesThePixelsBlur) {
         fitted.relight = tr.fields(1.0);
         err[j] = relative_albedo_error(fitted.intrinsic(), s);
     }
-    // Measured: 0.175 at one place (the blur), 0.071 averaged (the unblurred fit of RecoversAKnownAlbedo...:
-    // 0.05).
+    // Measured with the stage's default average (0.99): 0.174 at one place (the blur), 0.073 averaged (0.175 and
+    // 0.071 with 0.95); the unblurred fit of RecoversAKnownAlbedo...: 0.036.
     EXPECT_LT(err[1], 0.09) << "one place: " << err[0];
     EXPECT_GT(err[0], 2.0 * err[1]);
 }
