@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <optional>
 
@@ -147,6 +148,17 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                                 "can (default: {})",
                                 args.relight.ground_share))
         ->check(CLI::Range(0.001f, 1.0f));
+    cmd->add_option("--relight-average", args.relight.average_decay,
+                    fmt::format("The fitted fields are the moving average of the fit's parameters, weighted by "
+                                "this factor per step: 0.99 averages the last ~100 steps, 0 keeps the last "
+                                "step's (default: {})",
+                                args.relight.average_decay))
+        ->check(CLI::Range(0.0f, 0.9999f));
+    cmd->add_option("--relight-seed", args.relight.seed,
+                    "Seed of the relight stage's random draws (points, light directions, batches); two runs "
+                    "with different seeds show the stage's run-to-run spread (default: the model's training "
+                    "seed)")
+        ->check(CLI::Range(int64_t(0), std::numeric_limits<int64_t>::max()));
     cmd->add_option("--relight-batch", args.relight.batch,
                     fmt::format("Surface points per optimiser step (default: {} on a GPU, {} on the CPU)",
                                 k_relight_batch_gpu, k_relight_batch_cpu))

@@ -30,7 +30,8 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ss.borrowing_pixels = options.borrowing_pixels >= 0 ? options.borrowing_pixels
                                                         : (gpu ? k_relight_pixels_gpu : k_relight_pixels_cpu);
     ss.pooled_neighbours = options.pooled_neighbours;
-    ss.seed = model.config.training.seed;
+    const uint64_t seed = options.seed >= 0 ? uint64_t(options.seed) : model.config.training.seed;
+    ss.seed = seed;
     StatusLine line(stream_is_tty(stderr), options.quiet);
     std::unique_ptr<nerf::FieldQuery> query = nerf::make_field_query(options.backend, model);
     const nerf::RelightSamples samples =
@@ -51,7 +52,8 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     if (interrupts.stop_requested()) return false;
 
     nerf::RelightTrainSettings ts;
-    ts.seed = model.config.training.seed;
+    ts.seed = seed;
+    ts.average_decay = options.average_decay;
     ts.intrinsic.grid.log2_table_size = options.table_log2;
     ts.intrinsic.finest_resolution = options.finest_resolution;
     ts.intrinsic.diffuse = options.diffuse_lobe;

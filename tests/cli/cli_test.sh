@@ -288,6 +288,8 @@ expect_error 2 "--seed.*'-1' is not a whole number >= 0" render "$scene" -o "$tm
 expect_error 2 "--spp.*'010'" render "$scene" -o "$tmp/a.exr" --spp 010
 expect_error 2 "--time.*'nan'" train "$tmp" -o "$tmp/nan.npt" --time nan
 expect_error 2 "--surface-smoothness.*-1" train "$tmp" -o "$tmp/nan.npt" --surface-smoothness -1
+expect_error 2 "--relight-average.*1" train "$tmp" -o "$tmp/nan.npt" --relightable --relight-average 1
+expect_error 2 "--relight-seed.*'-3'" train "$tmp" -o "$tmp/nan.npt" --relightable --relight-seed -3
 # A resumed model keeps its config: the loss weight cannot change under it.
 printf 'x' >"$tmp/kept.npt"
 expect_error 1 "--surface-smoothness: a resumed model keeps the config" train "$tmp" -o "$tmp/kept.npt" --resume \
