@@ -7,7 +7,6 @@
 
 #include <chrono>
 #include <filesystem>
-#include <limits>
 #include <memory>
 #include <optional>
 
@@ -158,7 +157,7 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                     "Seed of the relight stage's random draws (points, light directions, batches); two runs "
                     "with different seeds show the stage's run-to-run spread (default: the model's training "
                     "seed)")
-        ->check(CLI::Range(int64_t(0), std::numeric_limits<int64_t>::max()));
+        ->each([&args](const std::string&) { args.relight.seed_given = true; });
     cmd->add_option("--relight-batch", args.relight.batch,
                     fmt::format("Surface points per optimiser step (default: {} on a GPU, {} on the CPU)",
                                 k_relight_batch_gpu, k_relight_batch_cpu))

@@ -30,7 +30,7 @@ bool run_relight_stage(nerf::NerfModel& model, const nerf::Dataset& data, const 
     ss.borrowing_pixels = options.borrowing_pixels >= 0 ? options.borrowing_pixels
                                                         : (gpu ? k_relight_pixels_gpu : k_relight_pixels_cpu);
     ss.pooled_neighbours = options.pooled_neighbours;
-    const uint64_t seed = options.seed >= 0 ? uint64_t(options.seed) : model.config.training.seed;
+    const uint64_t seed = options.seed_given ? options.seed : model.config.training.seed;
     ss.seed = seed;
     StatusLine line(stream_is_tty(stderr), options.quiet);
     std::unique_ptr<nerf::FieldQuery> query = nerf::make_field_query(options.backend, model);

@@ -52,7 +52,8 @@ struct RelightStageOptions {
     float ground_share = nerf::RelightTrainSettings{}.ground_share;
     int footprint_queries = k_relight_footprint;
     float average_decay = nerf::RelightTrainSettings{}.average_decay;
-    int64_t seed = -1;  // of the stage's draws; -1: the model's training seed
+    uint64_t seed = 0;          // of the stage's draws, when seed_given
+    bool seed_given = false;    // else the model's training seed
     int borrowing_pixels = -1;  // -1: k_relight_pixels_* of the backend
     int pooled_neighbours = k_relight_pool;
     int table_log2 =
