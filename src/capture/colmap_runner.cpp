@@ -49,9 +49,16 @@ struct QualityPreset {
     bool upsample;
     // Feature budget per frame (COLMAP's max_num_features): this many per megapixel of the frame SIFT sees,
     // within [min, max]. COLMAP keeps whole scale levels, coarsest first, until the budget is passed, so a
-    // frame keeps up to ~1.6x the budget (540x960, budget 518: 825 features per frame).
+    // frame keeps up to ~1.6x the budget (540x960, budget 518: 825 features per frame; budget 4147: every
+    // scale, ~2500 features with one orientation each).
     double features_per_megapixel;
     int min_features, max_features;
+    // Orientations SIFT may give one keypoint (COLMAP: 2, a second descriptor where the gradient histogram
+    // has a second peak). One gave the same poses with 28% fewer 3D points and a 30% faster mapper on a
+    // 100-frame handheld capture (docs/benchmarks.md, "Every scale, fewer pairs").
+    int max_orientations;
+    // The sequential matcher's overlap: each frame is matched with the next this many.
+    int sequential_overlap;
     // Mapper: a global bundle adjustment each time the model grew by this ratio (COLMAP: 1.1), with at most
     // these iterations and refinements; local ones with at most these iterations.
     double ba_global_ratio;
@@ -74,14 +81,17 @@ constexpr int k_ba_min_residuals_for_threads = 1000;
 
 QualityPreset preset(PosesQuality q) {
     switch (q) {
+        // Every scale at the frame's own size, matched with the next 5 frames: on four handheld captures the
+        // rotation error's median fell by 40-55% against the coarse scales matched with the next 15, in about
+        // the same time (docs/benchmarks.md, "Every scale, fewer pairs").
         case PosesQuality::Fast:
-            return {false, false, 1000, 512, 4096, 2.0, 20, 1, 10, 2.0};
+            return {false, false, 8000, 512, 8192, 1, 5, 2.0, 20, 1, 10, 2.0};
         case PosesQuality::Balanced:
-            return {false, true, 2000, 2048, 8192, 1.5, 25, 2, 15, 2.0};
+            return {false, true, 2000, 2048, 8192, 2, 15, 1.5, 25, 2, 15, 2.0};
         case PosesQuality::Best:
             break;
     }
-    return {true, true, 0, 8192, 8192, 1.1, 50, 5, 25, 4.0};
+    return {true, true, 0, 8192, 8192, 2, 15, 1.1, 50, 5, 25, 4.0};
 }
 
 struct Step {
@@ -212,13 +222,18 @@ ColmapStepOptions colmap_step_options(const ColmapSettings& s, int frame_width, 
     const bool upsample = p.upsample || side * shrink < k_min_sift_side;
     const double megapixels =
         double(frame_width) * double(frame_height) * shrink * shrink * (upsample ? 4.0 : 1.0) * 1e-6;
-    const int min_features = upsample && !p.upsample ? std::max(p.min_features, k_min_features_doubled)
-                                                     : p.min_features;
+    const bool small_frame = upsample && !p.upsample;
+    const int min_features = small_frame ? std::max(p.min_features, k_min_features_doubled) : p.min_features;
+    // A small frame keeps COLMAP's second orientations too: with one, the 320x240 turntable of the e2e test
+    // registered 69 of its 72 frames (its pose limit asks for 71).
+    const int orientations = small_frame ? 2 : p.max_orientations;
     o.max_num_features =
         std::clamp(int(std::lround(p.features_per_megapixel * megapixels)), min_features, p.max_features);
     const std::string features = std::to_string(o.max_num_features);
-    const std::vector<std::string> extraction = {"--SiftExtraction.first_octave", upsample ? "-1" : "0",
-                                                 "--SiftExtraction.max_num_features", features};
+    const std::vector<std::string> extraction = {
+        "--SiftExtraction.first_octave",         upsample ? "-1" : "0",
+        "--SiftExtraction.max_num_features",     features,
+        "--SiftExtraction.max_num_orientations", std::to_string(orientations)};
     const std::vector<std::string> matching = {"--SiftMatching.max_num_matches", features};
     // Point colours are not used by nerfpt; reading every frame again for them costs ~5% of the mapping.
     // clang-format off
@@ -236,6 +251,10 @@ ColmapStepOptions colmap_step_options(const ColmapSettings& s, int frame_width, 
     o.matching.insert(o.matching.end(), matching.begin(), matching.end());
     o.mapping.insert(o.mapping.end(), mapping.begin(), mapping.end());
     return o;
+}
+
+int sequential_overlap_of(const ColmapSettings& s) {
+    return s.sequential_overlap > 0 ? s.sequential_overlap : preset(s.quality).sequential_overlap;
 }
 
 std::vector<std::string> list_frames(const fs::path& frames) {
@@ -288,9 +307,10 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
                                          "--SiftMatching.use_gpu", gpu};
     matching.insert(matching.end(), options.matching.begin(), options.matching.end());
     if (s.matcher == "sequential") {
-        for (const std::string& a : {std::string("--SequentialMatching.overlap"), std::to_string(s.sequential_overlap),
-                                     std::string("--SequentialMatching.quadratic_overlap"),
-                                     std::string(s.quadratic_overlap ? "1" : "0")})
+        for (const std::string& a :
+             {std::string("--SequentialMatching.overlap"), std::to_string(sequential_overlap_of(s)),
+              std::string("--SequentialMatching.quadratic_overlap"),
+              std::string(s.quadratic_overlap ? "1" : "0")})
             matching.push_back(a);
     }
     std::vector<std::string> extraction = {s.colmap, "feature_extractor", "--database_path", db.string(),
@@ -325,7 +345,7 @@ ColmapRun run_colmap(const fs::path& frames, const fs::path& work, const ColmapS
         std::sort(poses.begin(), poses.end(),
                   [](const CameraPose& a, const CameraPose& b) { return a.name < b.name; });
         RevisitSettings rs;
-        rs.overlap = s.sequential_overlap;
+        rs.overlap = sequential_overlap_of(s);
         const auto pairs = revisit_pairs(poses, rs);
         if (!pairs.empty()) {
             if (on_step) on_step("loop closure");

@@ -19,7 +19,8 @@ namespace npt::capture {
 // How much work COLMAP spends on the poses (`--poses-quality`). Measured in docs/benchmarks.md ("How fast
 // COLMAP can be"): `best` is COLMAP's own extraction, matching and mapper settings (what nerfpt ran before
 // the option existed); `balanced` and `fast` cap the SIFT features with a budget that follows the image size
-// (`fast` also extracts at the frame's own size, not doubled) and run fewer, shorter bundle adjustments.
+// and run fewer, shorter bundle adjustments; `fast` extracts at the frame's own size, not doubled, keeps
+// every scale there with one orientation per keypoint, and matches each frame with its next 5 instead of 15.
 enum class PosesQuality { Fast, Balanced, Best };
 PosesQuality parse_poses_quality(const std::string& name);  // "fast", "balanced", "best"; throws npt::Error
 const char* poses_quality_name(PosesQuality quality);
@@ -29,11 +30,12 @@ struct ColmapSettings {
     std::string camera_model = "OPENCV";      // as instant-ngp's colmap2nerf uses
     int max_image_size = 1600;                // SIFT on larger frames costs time and adds little
     std::string colmap = "colmap";            // the executable, found on PATH
-    // Sequential matcher: each frame is matched with the next `sequential_overlap` ones. COLMAP's quadratic
-    // overlap (also frames i + 2^k) is off: on the beer video its far pairs matched the can's and the floor's
-    // look-alike sides and the mapper placed three stretches of the video on the wrong side of the object
-    // (docs/benchmarks.md); neighbours alone give one continuous path.
-    int sequential_overlap = 15;
+    // Sequential matcher: each frame is matched with the next `sequential_overlap` ones (0: the quality's,
+    // sequential_overlap_of). COLMAP's quadratic overlap (also frames i + 2^k) is off: on the beer video its
+    // far pairs matched the can's and the floor's look-alike sides and the mapper placed three stretches of
+    // the video on the wrong side of the object (docs/benchmarks.md); neighbours alone give one continuous
+    // path.
+    int sequential_overlap = 0;
     bool quadratic_overlap = false;
     // After a sequential matcher's first model: match the frames whose cameras revisit an earlier view and map
     // again (fast and balanced; best is COLMAP's own pipeline). On the handheld capture the rotation error fell
@@ -57,6 +59,8 @@ struct ColmapStepOptions {
     int max_num_features = 0;  // the SIFT budget per frame that was chosen
 };
 ColmapStepOptions colmap_step_options(const ColmapSettings& settings, int frame_width, int frame_height);
+// The sequential matcher's overlap the settings ask for: theirs, else the quality's.
+int sequential_overlap_of(const ColmapSettings& settings);
 
 // Extraction, matching, mapping, loop closure (matching the revisiting pairs and mapping again), refinement
 // (filtering the observations and adjusting again).

@@ -76,16 +76,41 @@ TEST(ColmapRunner, FasterQualitiesBudgetFeaturesByFrameSize) {
         EXPECT_TRUE(mentions(hd.mapping, "--Mapper.ba_local_max_num_iterations"));
         EXPECT_EQ(value_of(hd.mapping, "--Mapper.filter_max_reproj_error"), "2");
     }
-    // The measured budgets (docs/benchmarks.md): fast 1000 per megapixel at the frame's size, balanced 2000
-    // per megapixel of the doubled frame.
+    // The measured budgets (docs/benchmarks.md): fast 8000 per megapixel at the frame's size (every scale
+    // level of a 540x960 frame), balanced 2000 per megapixel of the doubled frame.
     ColmapSettings fast;
-    EXPECT_EQ(colmap_step_options(fast, 540, 960).max_num_features, 518);
-    EXPECT_EQ(colmap_step_options(fast, 720, 1280).max_num_features, 922);
-    // A small frame, doubled for SIFT, keeps at least 1024: it has few features to begin with.
-    EXPECT_EQ(colmap_step_options(fast, 320, 240).max_num_features, 1024);
+    EXPECT_EQ(colmap_step_options(fast, 540, 960).max_num_features, 4147);
+    EXPECT_EQ(colmap_step_options(fast, 720, 1280).max_num_features, 7373);
+    EXPECT_EQ(colmap_step_options(fast, 320, 240).max_num_features, 2458);  // doubled for SIFT
     ColmapSettings balanced;
     balanced.quality = PosesQuality::Balanced;
     EXPECT_EQ(colmap_step_options(balanced, 540, 960).max_num_features, 4147);
+    // A small frame doubled for SIFT keeps at least 1024 whatever its budget per megapixel: shrunk to 160x120
+    // and doubled, 8000 per megapixel would be 614.
+    fast.max_image_size = 160;
+    EXPECT_EQ(colmap_step_options(fast, 320, 240).max_num_features, 1024);
+}
+
+TEST(ColmapRunner, FastKeepsOneOrientationAndMatchesFewerNeighbours) {
+    ColmapSettings s;  // fast
+    EXPECT_EQ(value_of(colmap_step_options(s, 540, 960).extraction, "--SiftExtraction.max_num_orientations"),
+              "1");
+    EXPECT_EQ(sequential_overlap_of(s), 5);
+    // A frame small enough to be doubled has few features: it keeps them all.
+    EXPECT_EQ(value_of(colmap_step_options(s, 320, 240).extraction, "--SiftExtraction.max_num_orientations"),
+              "2");
+    s.quality = PosesQuality::Balanced;
+    EXPECT_EQ(value_of(colmap_step_options(s, 540, 960).extraction, "--SiftExtraction.max_num_orientations"),
+              "2");  // COLMAP's
+    EXPECT_EQ(sequential_overlap_of(s), 15);
+    s.quality = PosesQuality::Best;
+    EXPECT_FALSE(
+        mentions(colmap_step_options(s, 540, 960).extraction, "--SiftExtraction.max_num_orientations"));
+    EXPECT_EQ(sequential_overlap_of(s), 15);
+    s.sequential_overlap = 8;  // an explicit overlap wins over the quality's
+    EXPECT_EQ(sequential_overlap_of(s), 8);
+    s.quality = PosesQuality::Fast;
+    EXPECT_EQ(sequential_overlap_of(s), 8);
 }
 
 TEST(ColmapRunner, FastDoublesOnlySmallFrames) {
