@@ -34,30 +34,23 @@ void add_camera_model_option(CLI::App* cmd, std::string& model, const std::strin
 
 CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
     CLI::App* cmd = app.add_subcommand("poses", "Recover camera poses of frames with COLMAP; write transforms.json");
+    // clang-format off
     cmd->footer(
         "Runs the colmap command-line tool (Debian: apt-get install colmap; CPU only) in a work folder:\n"
-        "feature_extractor (one camera shared by all frames, --camera-model), the sequential matcher (frames "
-        "of a video,\n"
-        "in name order, each with its next 15) or the exhaustive one, and the mapper; keeps the "
-        "reconstruction\n"
-        "with the most frames (fast and balanced then close its loops: frames whose cameras revisit an\n"
-        "earlier view, 16 or more frames before, are matched with it and the mapper runs again, then drop "
-        "the\n"
-        "observations that reproject more than twice the model's mean error and adjust it again), warns "
-        "when\n"
-        "the camera path leaps between neighbouring frames, and\n"
-        "writes transforms.json as instant-ngp's colmap2nerf does: OpenGL cameras, the average camera up "
-        "turned\n"
+        "feature_extractor (one camera shared by all frames, --camera-model), the sequential matcher (frames of\n"
+        "a video, in name order, each with its next 5 (fast) or 15) or the exhaustive one, and the mapper; keeps\n"
+        "the reconstruction with the most frames (fast and balanced then close its loops: frames whose cameras\n"
+        "revisit an earlier view, farther back than the sequential matcher reaches, are matched with it and the\n"
+        "mapper runs again, then drop the observations that reproject more than twice the model's mean error and\n"
+        "adjust it again), warns when the camera path leaps between neighbouring frames, and\n"
+        "writes transforms.json as instant-ngp's colmap2nerf does: OpenGL cameras, the average camera up turned\n"
         "to +Z, the point the cameras look at moved to the origin, the mean camera distance scaled to 4,\n"
-        "aabb_scale 16 (docs/formats.md). Fails without writing when fewer than --min-registered of the "
-        "frames\n"
+        "aabb_scale 16 (docs/formats.md). Fails without writing when fewer than --min-registered of the frames\n"
         "are registered.\n"
-        "--poses-quality sets how much work COLMAP does (measured in docs/benchmarks.md, 'How fast COLMAP "
-        "can\n"
-        "be'; 100 frames of 540x960 with rich texture on 2 cores):\n"
+        "--poses-quality sets how much work COLMAP does (measured in docs/benchmarks.md, 'How fast COLMAP can\n"
+        "be' and 'Every scale, fewer pairs'):\n"
         "  fast      (default) SIFT at the frame's own size (frames under 800 px are still doubled), every\n"
-        "            scale level up to ~8000 features per megapixel, one orientation per keypoint; each "
-        "frame\n"
+        "            scale level up to ~8000 features per megapixel, one orientation per keypoint; each frame\n"
         "            matched with its next 5; a global bundle adjustment only when the model has doubled,\n"
         "            with fewer iterations.\n"
         "  balanced  SIFT on the doubled frame as COLMAP does, at most ~2000 features per megapixel of it,\n"
@@ -67,14 +60,12 @@ CLI::App* add_poses_command(CLI::App& app, PosesArgs& args) {
         "            existed; slowest.\n"
         "Every quality passes --threads to each COLMAP step.\n"
         "--camera-model is the lens model COLMAP fits (one camera for all frames); transforms.json gets its\n"
-        "fl_x, fl_y, cx, cy, k1, k2, p1, p2 (terms the model lacks are 0; a one-focal model writes fl_x = "
-        "fl_y).\n"
-        "OPENCV (default, as instant-ngp's colmap2nerf) fits fx and fy apart; RADIAL and SIMPLE_RADIAL fit "
-        "one\n"
-        "focal length, as a phone's square pixels have; the PINHOLE models assume no distortion. Measured "
-        "on\n"
+        "fl_x, fl_y, cx, cy, k1, k2, p1, p2 (terms the model lacks are 0; a one-focal model writes fl_x = fl_y).\n"
+        "OPENCV (default, as instant-ngp's colmap2nerf) fits fx and fy apart; RADIAL and SIMPLE_RADIAL fit one\n"
+        "focal length, as a phone's square pixels have; the PINHOLE models assume no distortion. Measured on\n"
         "simulated handheld captures in docs/benchmarks.md ('One focal length or two').\n"
         "Example: nerfpt poses out/beer/frames -o out/beer/transforms.json");
+    // clang-format on
     cmd->add_option("FRAMES", args.frames, "Folder of frames (.png/.jpg), e.g. written by 'nerfpt curate'")
         ->required();
     cmd->add_option("-o,--output", args.output, "transforms.json to write; its folder must exist")->required();

@@ -82,7 +82,7 @@ constexpr int k_ba_min_residuals_for_threads = 1000;
 QualityPreset preset(PosesQuality q) {
     switch (q) {
         // Every scale at the frame's own size, matched with the next 5 frames: on four handheld captures the
-        // rotation error's median fell by 40-55% against the coarse scales matched with the next 15, in about
+        // rotation error's median fell by 29-65% against the coarse scales matched with the next 15, in about
         // the same time (docs/benchmarks.md, "Every scale, fewer pairs").
         case PosesQuality::Fast:
             return {false, false, 8000, 512, 8192, 1, 5, 2.0, 20, 1, 10, 2.0};
