@@ -224,8 +224,8 @@ ColmapStepOptions colmap_step_options(const ColmapSettings& s, int frame_width, 
         double(frame_width) * double(frame_height) * shrink * shrink * (upsample ? 4.0 : 1.0) * 1e-6;
     const bool small_frame = upsample && !p.upsample;
     const int min_features = small_frame ? std::max(p.min_features, k_min_features_doubled) : p.min_features;
-    // A small frame keeps COLMAP's second orientations too: with one, the 320x240 turntable of the e2e test
-    // registered 69 of its 72 frames (its pose limit asks for 71).
+    // A small frame keeps COLMAP's second orientations too: it has few features, and with one the 320x240
+    // turntable of the e2e test registered 69 and 63 of its 72 frames in two runs (its limit asks for 71).
     const int orientations = small_frame ? 2 : p.max_orientations;
     o.max_num_features =
         std::clamp(int(std::lround(p.features_per_megapixel * megapixels)), min_features, p.max_features);
