@@ -51,7 +51,12 @@ CLI::App* add_eval_command(CLI::App& app, EvalArgs& args) {
         "> 0.5. iou: |alpha and mask| / |alpha or mask|. bf: DAVIS's boundary F-measure (seg2bmap\n"
         "boundaries matched within ceil(0.008 x image diagonal) px). leak: mean alpha over the pixels more\n"
         "than 5 px from the mask (floaters, a table left under the object). psnr in mask: PSNR over the\n"
-        "mask's pixels only, the object's own quality (with --object, whatever surrounds it is not rendered).\n"
+        "mask's pixels only, the object's own quality (with --object, whatever surrounds it is not "
+        "rendered).\n"
+        "An isolated object (--object, or a model from `capture`) on photos without alpha also gets psnr\n"
+        "in mask over the photo: the render's white background replaced by the photo itself (rgb + (photo -\n"
+        "white) x (1 - alpha)), so that the outline's pixels, where the photo mixes the object with the\n"
+        "room, compare the object over the room on both sides rather than over white in the render.\n"
         "Example: nerfpt eval lego.npt ../shared/data/nerf_synthetic/lego --every 8 -o out/lego_eval");
     cmd->add_option("MODEL", args.model, "Model file written by 'nerfpt train' (.npt)")->required();
     cmd->add_option("DATA", args.data,
@@ -229,8 +234,14 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     Progress progress(ps, std::cerr);
     const uint64_t total_rows = uint64_t(views.size()) * uint64_t(data.height);
     nlohmann::json per_image = nlohmann::json::array();
-    double sum_psnr = 0, sum_ssim = 0, sum_psnr_inside = 0;
+    double sum_psnr = 0, sum_ssim = 0, sum_psnr_inside = 0, sum_psnr_over_photo = 0;
     size_t views_inside = 0;
+    // An isolated object against photos of a whole room: inside the mask, the pixels along its outline mix
+    // the object with the room in the photo and with white in the render. The object over the photo itself is
+    // scored too, so that the object's own quality is not read as the background's.
+    const bool object_alone = args.object || (model.object && model.object->object_only);
+    const bool object_on_photos = object_alone && views_are_opaque(data, views);
+    const bool over_photo = with_masks && object_on_photos;
     MaskScores mask_sum;
     for (size_t k = 0; k < views.size(); ++k) {
         const size_t i = views[k];
@@ -253,10 +264,15 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
             // A view whose mask is empty (the object out of frame) has no inside: null, left out of the mean.
             const bool has_inside =
                 std::find(truth_masks[k].on.begin(), truth_masks[k].on.end(), 1) != truth_masks[k].on.end();
-            const double p_in = has_inside ? psnr_inside(render, truth, truth_masks[k])
-                                           : std::numeric_limits<double>::quiet_NaN();
+            const double nan = std::numeric_limits<double>::quiet_NaN();
+            const double p_in = has_inside ? psnr_inside(render, truth, truth_masks[k]) : nan;
+            const double p_photo =
+                has_inside && over_photo
+                    ? psnr_inside(nerf::over_plate(render, white, truth), truth, truth_masks[k])
+                    : nan;
             if (has_inside) {
                 sum_psnr_inside += p_in;
+                sum_psnr_over_photo += over_photo ? p_photo : 0.0;
                 ++views_inside;
             }
             mask_sum.iou += m.iou;
@@ -266,8 +282,12 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
             mask_sum.leak += m.leak;
             per_image.back()["mask"] = mask_json(m);
             per_image.back()["mask"]["psnr_inside"] = has_inside ? nlohmann::json(p_in) : nlohmann::json(nullptr);
+            if (over_photo)
+                per_image.back()["mask"]["psnr_inside_over_photo"] =
+                    has_inside ? nlohmann::json(p_photo) : nlohmann::json(nullptr);
             mask_text = fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%  psnr in mask {}", m.iou, m.boundary.f,
                                     100 * m.leak, has_inside ? fmt::format("{:.2f} dB", p_in) : "n/a (empty mask)");
+            if (over_photo && has_inside) mask_text += fmt::format(" (over the photo {:.2f} dB)", p_photo);
         }
         if (!args.output.empty()) {
             auto no_interrupt = interrupts.hold();  // complete files, or an interrupt waits for them
@@ -291,6 +311,8 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     std::string mask_text;
     const double psnr_inside_mean = views_inside ? sum_psnr_inside / double(views_inside)
                                                  : std::numeric_limits<double>::quiet_NaN();
+    const double psnr_over_photo_mean =
+        views_inside ? sum_psnr_over_photo / double(views_inside) : std::numeric_limits<double>::quiet_NaN();
     if (with_masks) {
         mask_mean.iou = mask_sum.iou / n;
         mask_mean.boundary.f = mask_sum.boundary.f / n;
@@ -300,13 +322,14 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
         mask_text = fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%  psnr in mask {}", mask_mean.iou,
                                 mask_mean.boundary.f, 100 * mask_mean.leak,
                                 views_inside ? fmt::format("{:.2f} dB", psnr_inside_mean) : "n/a (empty masks)");
+        if (over_photo && views_inside)
+            mask_text += fmt::format(" (over the photo {:.2f} dB)", psnr_over_photo_mean);
     }
     fmt::print("mean over {} views: psnr {:.2f} dB  ssim {:.4f}{}  ({} in all)\n", views.size(), mean_psnr,
                mean_ssim, mask_text, format_seconds(seconds));
-    // An isolated object against photos of a whole room: the whole-image numbers then compare white with the
-    // room (a few dB), which reads like a broken model.
-    const bool object_alone = args.object || (model.object && model.object->object_only);
-    if (object_alone && views_are_opaque(data, views))
+    // The whole-image numbers of an isolated object compare white with the room (a few dB), which reads like
+    // a broken model.
+    if (object_on_photos)
         spdlog::info(
             "the model is the object alone, rendered over white, and these photos have no alpha: psnr and "
             "ssim compare white with the photos' surroundings too; the object's own numbers are the mask "
@@ -329,6 +352,9 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
             metrics["mean"]["mask"] = mask_json(mask_mean);
             metrics["mean"]["mask"]["psnr_inside"] =
                 views_inside ? nlohmann::json(psnr_inside_mean) : nlohmann::json(nullptr);
+            if (over_photo)
+                metrics["mean"]["mask"]["psnr_inside_over_photo"] =
+                    views_inside ? nlohmann::json(psnr_over_photo_mean) : nlohmann::json(nullptr);
         }
         auto no_interrupt = interrupts.hold();
         write_text_atomic(out_dir / "metrics.json", metrics.dump(2) + "\n");

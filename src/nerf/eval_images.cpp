@@ -45,6 +45,21 @@ Image error_heat_map(const Image& a, const Image& b, float gain) {
     return heat;
 }
 
+Image over_plate(const Image& render, Rgb background, const Image& plate) {
+    if (render.channels != 4) throw Error("over_plate: the render has no alpha");
+    if (render.width != plate.width || render.height != plate.height || plate.channels < 3)
+        throw Error("over_plate: the render and the plate differ in size");
+    Image out(render.width, render.height, 3);
+    const size_t pixels = size_t(render.width) * size_t(render.height);
+    for (size_t p = 0; p < pixels; ++p) {
+        const float* r = &render.pixels[p * 4];
+        const float* q = &plate.pixels[p * size_t(plate.channels)];
+        for (int c = 0; c < 3; ++c)
+            out.pixels[p * 3 + size_t(c)] = r[c] + (q[c] - background[c]) * (1.0f - r[3]);
+    }
+    return out;
+}
+
 Image comparison_strip(const Image& ground_truth, const Image& render) {
     constexpr float k_error_gain = 4.0f;  // typical NeRF errors are a few percent: x4 makes them visible
     const Image heat = error_heat_map(ground_truth, render, k_error_gain);

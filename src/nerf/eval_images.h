@@ -19,6 +19,12 @@ Image ground_truth_image(const Dataset& data, size_t index, Rgb background);
 // (sRGB-encoded display values). Throws npt::Error when the sizes differ.
 Image error_heat_map(const Image& a, const Image& b, float gain);
 
+// An RGBA render (colour over `background`, alpha = coverage, as render_view returns it) put over `plate`
+// instead: rgb + (plate - background) * (1 - alpha), on the stored sRGB-encoded values as NeRF composites.
+// For an isolated object scored against photos of its room, the photo's own surroundings show through where
+// the object does not cover. RGB out. Throws npt::Error when the sizes differ or the render has no alpha.
+Image over_plate(const Image& render, Rgb background, const Image& plate);
+
 // [ground truth | render | error heat map (gain 4)], three RGB panels side by side.
 Image comparison_strip(const Image& ground_truth, const Image& render);
 

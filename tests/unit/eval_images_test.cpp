@@ -50,6 +50,28 @@ TEST(EvalImages, GroundTruthCompositesStoredValues) {
     test::expect_error_message([&] { ground_truth_image(d, 2, bg); }, {"frame 2", "2 frames"});
 }
 
+// The photo's ground truth over one background equals the same photo's ground truth over another once the
+// first background is replaced by the plate: over_plate is exact compositing algebra, alpha 0 the plate
+// alone.
+TEST(EvalImages, OverPlateReplacesTheBackground) {
+    const Dataset d = small_dataset();
+    const Rgb white(1.0f), grey(0.25f, 0.5f, 0.75f);
+    Image render = ground_truth_image(d, 1, white), with_alpha(3, 2, 4);
+    for (size_t p = 0; p < 6; ++p) {
+        for (size_t c = 0; c < 3; ++c) with_alpha.pixels[4 * p + c] = render.pixels[3 * p + c];
+        with_alpha.pixels[4 * p + 3] = float(51 * p) / 255.0f;
+    }
+    Image plate(3, 2, 3);
+    for (size_t p = 0; p < 6; ++p)
+        for (size_t c = 0; c < 3; ++c) plate.pixels[3 * p + c] = grey[int(c)];
+    const Image over = over_plate(with_alpha, white, plate), expect = ground_truth_image(d, 1, grey);
+    ASSERT_EQ(over.channels, 3);
+    for (size_t i = 0; i < over.pixels.size(); ++i) EXPECT_NEAR(over.pixels[i], expect.pixels[i], 1e-6) << i;
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(over.pixels[size_t(c)], grey[c], 1e-6);  // alpha 0: the plate
+    test::expect_error_message([&] { over_plate(render, white, plate); }, {"no alpha"});
+    test::expect_error_message([&] { over_plate(with_alpha, white, Image(2, 2, 3)); }, {"differ in size"});
+}
+
 TEST(EvalImages, HeatMapRampAndGain) {
     Image a(4, 1, 3), b(4, 1, 3);
     // Mean |diff| 0, 1/12, 1/6, 1/4: with gain 4 the ramp positions 0, 1/3, 2/3, 1.
