@@ -10,10 +10,11 @@
 # depth, at a few steps / stencil widths) on the trained NeRF. VARIANTS="name:ARGS;name:ARGS" re-runs the relight
 # stage alone on copies of the trained model with extra `nerfpt train` ARGS (e.g. --relight-normals density) and
 # scores each one's fields (at VARIANT_SPP, default 4). TRAIN_ARGS are added to the first training's arguments.
+# SPP2 (with RELIT=1) renders and scores the same model's views again at that spp.
 # Carry limit (64 MiB with the working tree, counted in disk blocks): the bundle of nerfpt and relight_fields
-# (~25 MB) and all of .gpu/relight (~31 MB) do not fit together. Without RELIT=1, .gpu/relight/dev's relit/,
-# scene/ and lights/ are not read; with RELIT=1, bundle nerfpt alone (relight_fields is then missing, and only
-# the render's AOVs are scored).
+# (~23 MB) and all of .gpu/relight (~31 MB) do not fit together. Leave out the env.exr files (never read) and
+# dev/test/r_*.png (blank stand-ins are written here: relight_fields needs only the test cameras); then RELIT=1
+# and VARIANTS run in one call. Without RELIT=1, .gpu/relight/dev's relit/, scene/ and lights/ are not read.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_out}
@@ -25,6 +26,23 @@ data=.gpu/relight/dev
 work=/tmp/relight
 rm -rf $work  # a warm machine keeps the last call's renders, which the scorer would read as this call's
 mkdir -p $work/pred
+if [[ ! -f $data/test/r_0.png ]]; then
+    # Left out of the carry (64 MiB) so that RELIT=1 and VARIANTS fit in one call: relight_fields reads only
+    # the test cameras, but the loader wants their images, so blank ones of the views' size stand in.
+    python3 - "$data" <<'EOF'
+import json, os, struct, sys, zlib
+data = sys.argv[1]
+w = h = 400  # the dev set's views
+def chunk(kind, body):
+    return struct.pack('>I', len(body)) + kind + body + struct.pack('>I', zlib.crc32(kind + body) & 0xffffffff)
+png = (b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', w, h, 8, 6, 0, 0, 0)) +
+       chunk(b'IDAT', zlib.compress(b''.join(b'\0' + bytes(4 * w) for _ in range(h)))) + chunk(b'IEND', b''))
+for f in json.load(open(os.path.join(data, 'transforms_test.json')))['frames']:
+    path = os.path.join(data, f['file_path'] + '.png')
+    if not os.path.exists(path):
+        open(path, 'wb').write(png)
+EOF
+fi
 score() {  # score LABEL PRED_DIR [score.py options]
     PYTHONPATH=scripts/exr_shim python3 .gpu/relight/score.py $data "$2" --label "$1" "${@:3}" | tee -a "$out/score.log"
 }
@@ -65,6 +83,11 @@ if [[ ${RELIT:-0} == 1 ]]; then
     BIN=$bin MODEL=$work/dev.npt DATA=$data PRED=$work/pred bench/relight_dev.sh render 2>&1 | tee "$out/relit.log"
     # The render's AOVs replaced relight_fields' (world normals of the nerfpt scene, +Y up).
     score dev-render $work/pred
+    if [[ -n ${SPP2:-} ]]; then  # the same model's renders at another spp: how much of the score is MC noise
+        SPP=$SPP2 BIN=$bin MODEL=$work/dev.npt DATA=$data PRED=$work/pred_spp2 bench/relight_dev.sh render 2>&1 |
+            tee "$out/relit_spp2.log" | tail -1
+        score "dev-render-${SPP2}spp" $work/pred_spp2
+    fi
 fi
 if [[ ${EMISSIVE:-0} == 1 ]]; then
     # The baseline: the same model rendered as today, emissive (its capture light baked in).
