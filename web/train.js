@@ -146,12 +146,52 @@ function setupOrbit(h) {
 }
 
 // --- the socket -----------------------------------------------------------------------------------------------
-const ws = new WebSocket(`ws://${location.host}/ws${location.search}`);
-ws.binaryType = 'arraybuffer';
+// A dropped socket is opened again, with backoff, while the page is open: the server greets the new one with its
+// whole state (the charts start over from it) and the page re-sends its orbit camera, as a new page does. The
+// server ends with the training's process: after a few failed tries the page says so, and keeps trying (nerfpt
+// may serve here again).
+const retryFirstMs = 500, retryMaxMs = 5000, triesBeforeStopped = 4;
+let ws = null, retryMs = retryFirstMs, failedTries = 0, leaving = false;
+let reconnected = false;  // the next state is the first after a reconnect
+test.connects = 0;
+window.addEventListener('pagehide', () => { leaving = true; });
+window.addEventListener('pageshow', (e) => {  // back from the back/forward cache: its socket was closed
+  leaving = false;
+  if (e.persisted && ws.readyState === WebSocket.CLOSED) connect();
+});
+function connect() {
+  ws = new WebSocket(`ws://${location.host}/ws${location.search}`);
+  ws.binaryType = 'arraybuffer';
+  ws.onopen = onOpen;
+  ws.onmessage = onMessage;
+  ws.onclose = onClose;
+}
+function onOpen() {
+  retryMs = retryFirstMs;
+  failedTries = 0;
+  test.closed = false;
+  if (++test.connects === 1) return;
+  $('status').textContent = '';
+  reconnected = true;
+  sendCamera();
+}
+function onClose(e) {
+  if (leaving || e.target !== ws) return;
+  test.closed = true;
+  ++failedTries;
+  const next = `next try in ${(retryMs / 1000).toFixed(1)} s`;
+  $('status').textContent = failedTries <= triesBeforeStopped ? `reconnecting to nerfpt… (${next})`
+    : test.finished ? `nerfpt has stopped: the training had finished and its model is saved (this page reconnects if nerfpt serves here again; ${next})`
+    : `nerfpt is not answering after ${failedTries} tries: the training was stopped, or the machine is overloaded (${next})`;
+  setTimeout(connect, retryMs);
+  retryMs = Math.min(2 * retryMs, retryMaxMs);
+}
 function send(msg) { if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg)); }
 test.send = send;
-ws.onclose = () => { $('status').textContent = 'disconnected from nerfpt (it has stopped)'; test.closed = true; };
-ws.onmessage = (ev) => {
+// What the orbit was set up for: after a reconnect, a state of another training (on this port) needs a fresh page.
+const orbitShape = (m) => JSON.stringify([m.title, m.held_out && m.held_out.camera]);
+let lastState = null;
+function onMessage(ev) {
   if (typeof ev.data !== 'string') {
     const v = new DataView(ev.data);
     const n = v.getUint32(0, true);
@@ -168,6 +208,12 @@ ws.onmessage = (ev) => {
   }
   const m = JSON.parse(ev.data);
   if (m.type === 'state') {
+    if (reconnected && camera && m.held_out && lastState.held_out && orbitShape(m) !== orbitShape(lastState)) {
+      location.reload();
+      return;
+    }
+    reconnected = false;
+    lastState = m;
     test.state = m;
     run = m.run;
     $('title').textContent = m.title;
@@ -199,5 +245,6 @@ ws.onmessage = (ev) => {
     test.errors.push(m.message);
     $('status').textContent = m.message;
   }
-};
+}
 redraw();
+connect();

@@ -6,6 +6,11 @@ function say(text, error = false) {
   statusEl.textContent = text;
   statusEl.className = error ? 'error' : '';
 }
+// A note that goes away by itself (unless something else was said meanwhile).
+function sayBriefly(text) {
+  say(text);
+  setTimeout(() => { if (statusEl.textContent === text) say(''); }, 4000);
+}
 
 let THREE, OrbitControls, TransformControls, GUI;
 try {
@@ -26,13 +31,87 @@ const test = { frames: 0, header: null, state: null, errors: [], messages: [] };
 window.nerfpt = test;
 
 // --- the socket -------------------------------------------------------------------------------------------
-const ws = new WebSocket(`ws://${location.host}/ws${location.search}`);
-ws.binaryType = 'arraybuffer';
+// A dropped socket (nerfpt serve restarted, a connection reset) is opened again, with backoff, for as long as the
+// page is open. The server greets a new socket as a new page (its state; a view from the start camera), so after
+// a reconnect the page re-sends what is its own: its camera, and the edits it made while disconnected or just
+// before the drop.
+const retryFirstMs = 500, retryMaxMs = 5000;
+let ws = null;
+let retryMs = retryFirstMs;
+let leaving = false;          // the page is being unloaded: its socket closes on purpose
+let awaitingState = false;    // reconnected: the server's first state re-syncs the panel, then edits are re-sent
+let awaitingOwnView = false;  // reconnected: frames from the start camera are not this page's view
+// Edits made while disconnected, the newest per control: they are absolute values, so sending the last one is
+// the edit. One-off actions (save, render, keyframes) are not kept: they are refused, visibly.
+const unsent = new Map();
+const keptTypes = new Set(['volume', 'light', 'settings', 'use_camera']);
+// Those sent just before a drop may not have reached the server (a reset loses what it had not read): the last
+// second's are sent again after a reconnect. Absolute values: one that did arrive is only applied again.
+const recentlySent = [];
+const recentMs = 1000;
+test.connects = 0;
+test.closes = [];
+window.addEventListener('pagehide', () => { leaving = true; });
+window.addEventListener('pageshow', (e) => {  // back from the back/forward cache: its socket was closed
+  leaving = false;
+  if (e.persisted && ws.readyState === WebSocket.CLOSED) connect();
+});
+
+function connect() {
+  ws = new WebSocket(`ws://${location.host}/ws${location.search}`);
+  ws.binaryType = 'arraybuffer';
+  ws.onopen = onOpen;
+  ws.onmessage = onMessage;
+  ws.onclose = onClose;
+}
+function onOpen() {
+  retryMs = retryFirstMs;
+  if (++test.connects === 1) return;
+  sayBriefly('reconnected to nerfpt serve');
+  awaitingState = awaitingOwnView = true;
+  sendCamera();
+}
+function onClose(e) {
+  if (leaving || e.target !== ws) return;  // unloading, or a socket already replaced
+  if (test.connects) test.closes.push({ code: e.code, reason: e.reason, clean: e.wasClean, at: Date.now() });
+  keepRecentlySent();
+  const waiting = unsent.size ? ` · ${unsent.size} edit${unsent.size > 1 ? 's wait' : ' waits'} to be sent` : '';
+  say(`${test.connects ? 'reconnecting' : 'connecting'} to nerfpt serve… (next try in ${(retryMs / 1000).toFixed(1)} s${waiting})`, true);
+  setTimeout(connect, retryMs);
+  retryMs = Math.min(2 * retryMs, retryMaxMs);
+}
 function send(msg) {
-  if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
+  const kept = keptTypes.has(msg.type);
+  if (ws.readyState === WebSocket.OPEN && !(kept && awaitingState)) {
+    if (msg.type === 'use_camera') awaitingOwnView = false;  // the server places the view: follow it
+    ws.send(JSON.stringify(msg));
+    if (kept) recentlySent.push({ msg, at: performance.now() });
+    while (recentlySent.length && performance.now() - recentlySent[0].at > recentMs) recentlySent.shift();
+  } else if (kept) {
+    unsent.set(editKey(msg), msg);
+  } else if (msg.type !== 'camera') {  // the camera is re-sent on reconnect
+    say(`not connected to nerfpt serve: '${msg.type}' was not sent; do it again once reconnected`, true);
+  }
 }
 test.send = send;
-ws.onclose = () => say('disconnected from nerfpt serve (reload the page when it runs again)', true);
+// Which control a message sets: a later message for the same control replaces it.
+function editKey(msg) {
+  const fields = Object.keys(msg).filter((k) => k !== 'type' && k !== 'index').sort();
+  return `${msg.type}:${msg.index ?? ''}:${fields.join(',')}`;
+}
+function keepRecentlySent() {
+  const newer = new Set(unsent.keys());  // made while disconnected: newer than anything sent before
+  for (const { msg, at } of recentlySent)
+    if (performance.now() - at <= recentMs && !newer.has(editKey(msg))) unsent.set(editKey(msg), msg);
+  recentlySent.length = 0;
+}
+function sendUnsent() {
+  const n = unsent.size;
+  const edits = [...unsent.values()];
+  unsent.clear();
+  for (const m of edits) send(m);
+  if (n) sayBriefly(`reconnected to nerfpt serve; sent the ${n} edit${n > 1 ? 's' : ''} it may have missed`);
+}
 
 // --- three.js: a camera that matches the server's, helpers drawn over the image ------------------------------
 const renderer = new THREE.WebGLRenderer({ canvas: overlay, alpha: true, antialias: true });
@@ -85,6 +164,10 @@ function cameraMessage() {
   const up = new THREE.Vector3(0, 1, 0).applyQuaternion(camera.quaternion);
   return { type: 'camera', position: camera.position.toArray(), forward: f.toArray(), up: up.toArray(), fov_deg: camera.fov };
 }
+function sendCamera() {
+  lastCameraSent = performance.now();
+  send(cameraMessage());
+}
 controls.addEventListener('change', () => { cameraDirty = true; });
 
 // WASD fly: moves the camera and the orbit target together.
@@ -118,8 +201,7 @@ function tick(now) {
   }
   if (cameraDirty) {  // at most one camera message per animation frame
     cameraDirty = false;
-    lastCameraSent = now;
-    send(cameraMessage());
+    sendCamera();
   }
   renderer.render(scene, camera);
   requestAnimationFrame(tick);
@@ -247,37 +329,71 @@ function refreshVolumePanel() {
   for (const c of volFolder.controllersRecursive()) c.updateDisplay();
 }
 
+// What the panel's lists are made from: a reconnect that finds another scene starts the page afresh.
+const sceneShape = (st) => JSON.stringify([st.scene, ...['volumes', 'lights', 'cameras'].map((k) => st[k].map((x) => x.name))]);
+
+function buildLists(st) {
+  const names = {}; st.cameras.forEach((c, i) => { names[c.name || `camera ${i}`] = i; });
+  if (st.cameras.length) {
+    ui.camera = 0;
+    cameraCtl = viewFolder.add(ui, 'camera', names).name('scene camera').onChange((i) => send({ type: 'use_camera', index: Number(i) }));
+  }
+  const volNames = { '(none)': -1 }; st.volumes.forEach((v, i) => { volNames[v.name] = i; });
+  volumeCtl = volFolder.add(ui, 'volume', volNames).name('select').onChange((i) => select(Number(i)));
+  ui.lights = st.lights.map((l) => ({ scale: l.intensity_scale }));
+  st.lights.forEach((l, i) => lightFolder.add(ui.lights[i], 'scale', 0, 10, 0.01).name(`${l.name} (${l.type})`)
+    .onFinishChange((v) => send({ type: 'light', index: i, intensity_scale: v })));
+  if (!st.lights.length) lightFolder.hide();
+}
+
+// The server's settings as the panel shows them: from the first state, and again after a reconnect (another
+// page may have changed them meanwhile, or nerfpt serve was restarted).
+function fillPanel(st) {
+  ui.spp = st.target_spp; ui.max_depth = st.max_depth; ui.exposure = st.exposure; ui.preview = st.preview_divisor; ui.view = st.view || 'beauty';
+  st.lights.forEach((l, i) => { ui.lights[i].scale = l.intensity_scale; });
+  saveCtl.enable(st.savable);
+  saveCtl.name(st.savable ? 'Save edits into the scene file' : 'Save: ' + st.why_not_savable);
+  for (const c of gui.controllersRecursive()) c.updateDisplay();
+}
+
+// The state as it is once the unsent edits are applied: what the panel shows after a reconnect.
+function withUnsent(st) {
+  const s = structuredClone(st);
+  for (const m of unsent.values()) {
+    if (m.type === 'settings')
+      for (const [k, v] of Object.entries(m)) if (k !== 'type') s[k === 'spp' ? 'target_spp' : k] = v;
+    if (m.type === 'light' && s.lights[m.index]) s.lights[m.index].intensity_scale = m.intensity_scale;
+  }
+  return s;
+}
+
 function onState(st) {
   const first = !state;
+  if (awaitingState && !first && sceneShape(st) !== sceneShape(state)) {
+    location.reload();  // another scene: this page's lists, selection and unsent edits are not for it
+    return;
+  }
   const rebuild = first || st.volumes.length !== state.volumes.length;
   state = st;
   test.state = st;
   setSize(st.width, st.height);
   if (first) {
     applyServerCamera(st.camera);
-    ui.spp = st.target_spp; ui.max_depth = st.max_depth; ui.exposure = st.exposure; ui.preview = st.preview_divisor; ui.view = st.view || 'beauty';
-    const names = {}; st.cameras.forEach((c, i) => { names[c.name || `camera ${i}`] = i; });
-    if (st.cameras.length) {
-      ui.camera = 0;
-      cameraCtl = viewFolder.add(ui, 'camera', names).name('scene camera').onChange((i) => send({ type: 'use_camera', index: Number(i) }));
-    }
-    const volNames = { '(none)': -1 }; st.volumes.forEach((v, i) => { volNames[v.name] = i; });
-    volumeCtl = volFolder.add(ui, 'volume', volNames).name('select').onChange((i) => select(Number(i)));
-    ui.lights = st.lights.map((l) => ({ scale: l.intensity_scale }));
-    st.lights.forEach((l, i) => lightFolder.add(ui.lights[i], 'scale', 0, 10, 0.01).name(`${l.name} (${l.type})`)
-      .onFinishChange((v) => send({ type: 'light', index: i, intensity_scale: v })));
-    if (!st.lights.length) lightFolder.hide();
-    if (!st.savable) { saveCtl.disable(); saveCtl.name('Save: ' + st.why_not_savable); }
-    for (const c of viewFolder.controllersRecursive()) c.updateDisplay();
+    buildLists(st);
   }
+  if (first || awaitingState) fillPanel(withUnsent(st));
   if (rebuild) buildVolumes(); else syncVolumes();
   keyCtl.name(`Add keyframe (${st.keyframes})`);
   refreshVolumePanel();
+  if (awaitingState) {
+    awaitingState = false;
+    sendUnsent();
+  }
 }
 
 // --- messages and frames --------------------------------------------------------------------------------------
 let drawing = Promise.resolve();
-ws.onmessage = async (ev) => {
+function onMessage(ev) {
   if (typeof ev.data === 'string') {
     const m = JSON.parse(ev.data);
     test.messages.push(m);
@@ -292,6 +408,9 @@ ws.onmessage = async (ev) => {
   const view = new DataView(ev.data);
   const n = view.getUint32(0, true);
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(ev.data, 4, n)));
+  // After a reconnect the server renders from its start camera until this page's camera arrives: not this view.
+  if (awaitingOwnView && header.camera_from === 0) return;
+  awaitingOwnView = false;
   const jpeg = new Blob([new Uint8Array(ev.data, 4 + n)], { type: 'image/jpeg' });
   drawing = drawing.then(async () => {
     const bitmap = await createImageBitmap(jpeg);
@@ -317,7 +436,7 @@ ws.onmessage = async (ev) => {
       (header.latency_ms !== undefined ? ` · ${header.latency_ms.toFixed(0)} ms after the change` : '') +
       (state ? ` · ${state.backend}` : '');
   });
-};
+}
 
 // nerfpt serve CAPTURE_DIR: a link to the capture's report (the server answers /capture/report.json only then).
 fetch('/capture/report.json' + location.search, { method: 'HEAD' }).then((r) => {
@@ -340,3 +459,5 @@ test.project = (p) => {
   const r = overlay.getBoundingClientRect();
   return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
 };
+
+connect();  // last: its handlers use everything above

@@ -184,13 +184,24 @@ struct Server::Impl {
             ws.async_read(buffer, [self = shared_from_this()](beast::error_code ec, size_t) {
                 if (ec) {
                     if (ec != websocket::error::closed && ec != asio::error::operation_aborted && ec != asio::error::eof)
-                        spdlog::warn("serve: page {}: {}; closing it", self->id, ec.message());
+                        spdlog::warn("serve: page {}: {}{}; closing it", self->id, ec.message(),
+                                     self->close_received());
                     self->close();
                     return;
                 }
                 self->on_message();
                 self->read();
             });
+        }
+        // Beast reports how its closing handshake ended, not the page's Close frame before it: a browser that
+        // sent Close and dropped the connection at once reads as "Transport endpoint is not connected" (or a
+        // reset). Chromium does so with code 1001 when the page unloads or its renderer dies, and with 1002
+        // when it fails the WebSocket (a frame it refuses): the code tells them apart.
+        std::string close_received() const {
+            const websocket::close_reason& r = ws.reason();
+            if (r.code == websocket::close_code::none) return {};
+            return " (after the page's Close frame, code " + std::to_string(r.code) +
+                   (r.reason.empty() ? "" : " '" + std::string(r.reason.data(), r.reason.size()) + "'") + ")";
         }
         void on_message() {
             const std::string text = beast::buffers_to_string(buffer.data());
@@ -248,6 +259,9 @@ struct Server::Impl {
             ws.async_write(asio::buffer(*writing), [self = shared_from_this()](beast::error_code ec, size_t) {
                 self->writing.reset();
                 if (ec) {
+                    if (ec != asio::error::operation_aborted && ec != websocket::error::closed)
+                        spdlog::warn("serve: page {}: sending failed: {}; closing it", self->id,
+                                     ec.message());
                     self->close();
                     return;
                 }

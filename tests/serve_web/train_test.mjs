@@ -1,6 +1,7 @@
 // nerfpt train --serve's page in headless chromium: a short CPU training of NeRF-synthetic lego at 1/8 size;
 // the page shows the loss chart growing, the held-out strip (truth | render | error) arriving and updating,
-// an orbit render after a drag, and says when training has finished. Screenshot: $SHOTS/serve_training.png.
+// an orbit render after a drag, reconnects after the server drops its socket, says when training has finished,
+// and says plainly that nerfpt has stopped once it has. Screenshot: $SHOTS/serve_training.png.
 import { spawn } from 'node:child_process';
 import puppeteer from 'puppeteer-core';
 
@@ -45,6 +46,13 @@ try {
   await page.mouse.up();
   await page.waitForFunction((n) => window.nerfpt.frames > n, { timeout: 60000 }, framesBefore);
   check(true, 'a drag on the orbit view brought a render of the current model');
+  // The server drops the page's socket (a message over its size limit): the page reconnects, takes the state
+  // again and re-sends its orbit camera, so status messages and an orbit render follow.
+  const at = await page.evaluate(() => ({ trains: window.nerfpt.trains, frames: window.nerfpt.frames }));
+  await page.evaluate(() => window.nerfpt.send({ type: 'camera', pad: 'x'.repeat(70 * 1024) }));
+  await page.waitForFunction((a) => window.nerfpt.connects === 2 && window.nerfpt.trains > a.trains && window.nerfpt.frames > a.frames,
+    { timeout: 60000 }, at);
+  check(true, 'the page reconnected after the server dropped its socket: status and an orbit render follow');
   await page.waitForFunction((s) => window.nerfpt.strips >= 2 && window.nerfpt.lastEval.step > s, { timeout: 180000 }, e1.step);
   const e2 = await page.evaluate(() => window.nerfpt.lastEval);
   check(true, `the strip updated: step ${e1.step} -> ${e2.step}, PSNR ${e1.psnr.toFixed(2)} -> ${e2.psnr.toFixed(2)} dB`);
@@ -55,6 +63,10 @@ try {
   check(/stays up until Ctrl-C/.test(out), 'nerfpt keeps serving after training');
   await new Promise((r) => setTimeout(r, 500));
   await page.screenshot({ path: `${SHOTS}/serve_training.png` });
+  // nerfpt stops: after a few tries the page says so.
+  server.kill('SIGINT');
+  await page.waitForFunction(() => /nerfpt has stopped/.test(document.getElementById('status').textContent), { timeout: 30000 });
+  check(true, `once nerfpt has stopped the page says "${(await page.evaluate(() => document.getElementById('status').textContent)).slice(0, 60)}…"`);
 } finally {
   await browser.close();
   server.kill('SIGINT');
