@@ -2,6 +2,7 @@
 // canvases, the held-out strip (truth | render | error) and the current model orbited through three.js's
 // OrbitControls (only the controls: the server renders). Exposes window.nerfpt for the browser test.
 import { fmtTime, fillStages } from '/stages.js';
+import { reconnectingSocket } from '/socket.js';
 
 const $ = (id) => document.getElementById(id);
 const test = { trains: 0, evals: 0, frames: 0, strips: 0, state: null, lastTrain: null, lastEval: null, errors: [] };
@@ -150,24 +151,12 @@ function setupOrbit(h) {
 // whole state (the charts start over from it) and the page re-sends its orbit camera, as a new page does. The
 // server ends with the training's process: after a few failed tries the page says so, and keeps trying (nerfpt
 // may serve here again).
-const retryFirstMs = 500, retryMaxMs = 5000, triesBeforeStopped = 4;
-let ws = null, retryMs = retryFirstMs, failedTries = 0, leaving = false;
+const triesBeforeStopped = 4;
+const socket = reconnectingSocket({ onOpen, onMessage, onDrop });
+let failedTries = 0;
 let reconnected = false;  // the next state is the first after a reconnect
 test.connects = 0;
-window.addEventListener('pagehide', () => { leaving = true; });
-window.addEventListener('pageshow', (e) => {  // back from the back/forward cache: its socket was closed
-  leaving = false;
-  if (e.persisted && ws.readyState === WebSocket.CLOSED) connect();
-});
-function connect() {
-  ws = new WebSocket(`ws://${location.host}/ws${location.search}`);
-  ws.binaryType = 'arraybuffer';
-  ws.onopen = onOpen;
-  ws.onmessage = onMessage;
-  ws.onclose = onClose;
-}
 function onOpen() {
-  retryMs = retryFirstMs;
   failedTries = 0;
   test.closed = false;
   if (++test.connects === 1) return;
@@ -175,18 +164,15 @@ function onOpen() {
   reconnected = true;
   sendCamera();
 }
-function onClose(e) {
-  if (leaving || e.target !== ws) return;
+function onDrop(_closeEvent, nextTryMs) {
   test.closed = true;
   ++failedTries;
-  const next = `next try in ${(retryMs / 1000).toFixed(1)} s`;
+  const next = `next try in ${(nextTryMs / 1000).toFixed(1)} s`;
   $('status').textContent = failedTries <= triesBeforeStopped ? `reconnecting to nerfpt… (${next})`
     : test.finished ? `nerfpt has stopped: the training had finished and its model is saved (this page reconnects if nerfpt serves here again; ${next})`
     : `nerfpt is not answering after ${failedTries} tries: the training was stopped, or the machine is overloaded (${next})`;
-  setTimeout(connect, retryMs);
-  retryMs = Math.min(2 * retryMs, retryMaxMs);
 }
-function send(msg) { if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg)); }
+function send(msg) { if (socket.isOpen()) socket.send(JSON.stringify(msg)); }
 test.send = send;
 // What the orbit was set up for: after a reconnect, a state of another training (on this port) needs a fresh page.
 const orbitShape = (m) => JSON.stringify([m.title, m.held_out && m.held_out.camera]);
@@ -247,4 +233,4 @@ function onMessage(ev) {
   }
 }
 redraw();
-connect();
+socket.connect();

@@ -1,5 +1,7 @@
 // nerfpt serve's page: shows the frames the server path-traces, sends camera moves (orbit, WASD fly) and edits
 // (the volume gizmo, the panel), and exposes window.nerfpt for the browser test.
+import { reconnectingSocket } from '/socket.js';
+
 const statusEl = document.getElementById('status');
 const statsEl = document.getElementById('stats');
 function say(text, error = false) {
@@ -35,10 +37,7 @@ window.nerfpt = test;
 // page is open. The server greets a new socket as a new page (its state; a view from the start camera), so after
 // a reconnect the page re-sends what is its own: its camera, and the edits it made while disconnected or just
 // before the drop.
-const retryFirstMs = 500, retryMaxMs = 5000;
-let ws = null;
-let retryMs = retryFirstMs;
-let leaving = false;          // the page is being unloaded: its socket closes on purpose
+const socket = reconnectingSocket({ onOpen, onMessage, onDrop });
 let awaitingState = false;    // reconnected: the server's first state re-syncs the panel, then edits are re-sent
 let awaitingOwnView = false;  // reconnected: frames from the start camera are not this page's view
 // Edits made while disconnected, the newest per control: they are absolute values, so sending the last one is
@@ -51,40 +50,24 @@ const recentlySent = [];
 const recentMs = 1000;
 test.connects = 0;
 test.closes = [];
-window.addEventListener('pagehide', () => { leaving = true; });
-window.addEventListener('pageshow', (e) => {  // back from the back/forward cache: its socket was closed
-  leaving = false;
-  if (e.persisted && ws.readyState === WebSocket.CLOSED) connect();
-});
 
-function connect() {
-  ws = new WebSocket(`ws://${location.host}/ws${location.search}`);
-  ws.binaryType = 'arraybuffer';
-  ws.onopen = onOpen;
-  ws.onmessage = onMessage;
-  ws.onclose = onClose;
-}
 function onOpen() {
-  retryMs = retryFirstMs;
   if (++test.connects === 1) return;
   sayBriefly('reconnected to nerfpt serve');
   awaitingState = awaitingOwnView = true;
   sendCamera();
 }
-function onClose(e) {
-  if (leaving || e.target !== ws) return;  // unloading, or a socket already replaced
+function onDrop(e, nextTryMs) {
   if (test.connects) test.closes.push({ code: e.code, reason: e.reason, clean: e.wasClean, at: Date.now() });
   keepRecentlySent();
   const waiting = unsent.size ? ` · ${unsent.size} edit${unsent.size > 1 ? 's wait' : ' waits'} to be sent` : '';
-  say(`${test.connects ? 'reconnecting' : 'connecting'} to nerfpt serve… (next try in ${(retryMs / 1000).toFixed(1)} s${waiting})`, true);
-  setTimeout(connect, retryMs);
-  retryMs = Math.min(2 * retryMs, retryMaxMs);
+  say(`${test.connects ? 'reconnecting' : 'connecting'} to nerfpt serve… (next try in ${(nextTryMs / 1000).toFixed(1)} s${waiting})`, true);
 }
 function send(msg) {
   const kept = keptTypes.has(msg.type);
-  if (ws.readyState === WebSocket.OPEN && !(kept && awaitingState)) {
+  if (socket.isOpen() && !(kept && awaitingState)) {
     if (msg.type === 'use_camera') awaitingOwnView = false;  // the server places the view: follow it
-    ws.send(JSON.stringify(msg));
+    socket.send(JSON.stringify(msg));
     if (kept) recentlySent.push({ msg, at: performance.now() });
     while (recentlySent.length && performance.now() - recentlySent[0].at > recentMs) recentlySent.shift();
   } else if (kept) {
@@ -460,4 +443,4 @@ test.project = (p) => {
   return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
 };
 
-connect();  // last: its handlers use everything above
+socket.connect();  // last: its handlers use everything above
