@@ -1,18 +1,25 @@
-// The intrinsic fields of a relightable model seen from a data set's cameras: per pixel, the albedo and the normal
-// (training world, the data set's axes) of camera-ray scattering events drawn from the volume weights, averaged
-// over the events `spp` draws find (what a relit render's first-event AOVs converge to), as `albedo_N.exr` /
-// `normal_N.exr` (and `roughness_N.exr`, grey) for
+// The intrinsic fields of a relightable model seen from a data set's cameras: per pixel, the albedo and the
+// normal (training world, the data set's axes) of camera-ray scattering events drawn from the volume weights,
+// averaged over the events `spp` draws find (what a relit render's first-event AOVs converge to), as
+// `albedo_N.exr` / `normal_N.exr` (and `roughness_N.exr`, grey) for
 // ../shared/data/relight/score.py (run it with --normals-zup). Prints a table of time and coverage.
 //   relight_fields MODEL.npt DATA/transforms_test.json OUT_DIR [--spp 8] [--backend cpu|cuda]
-//                  [--normals predicted|density|depth] [--normal-step 0.004] [--normal-pixels 2] [--at events|mean]
-// --at mean queries the albedo and roughness once per pixel, at the mean of its rays' event positions (about the
-// expected termination point), instead of averaging them over the events: how much the events' spread in depth
-// about the surface blurs the albedo (docs/benchmarks.md, issue 24).
-// --normals measures an estimator of surface_normals.h instead of the fitted normal field (the model then need
-// not be relightable; the albedo is written only for relightable models): what the relight stage's targets are
-// worth against the ground truth.
+//                  [--normals predicted|density|depth] [--normal-step 0.004] [--normal-pixels 2] [--at
+//                  events|mean]
+// Also prints the events' spread in depth: per pixel with events on every draw, the standard deviation of
+// their distance along the camera ray, in units of the pixel's footprint at that distance (median and 90th
+// percentile over the views' pixels). Draws of one pixel pass through different places in it, so a slanted
+// surface adds its slope to the spread; on surfaces facing the camera it is the density shell's thickness,
+// which blurs the fields where the events fall off the surface (docs/benchmarks.md, issue 24).
+// --at mean queries the albedo and roughness once per pixel, at the mean of its rays' event positions (about
+// the expected termination point), instead of averaging them over the events: how much the events' spread in
+// depth about the surface blurs the albedo (docs/benchmarks.md, issue 24).
+// --normals measures an estimator of surface_normals.h instead of the fitted normal field (the model then
+// need not be relightable; the albedo is written only for relightable models): what the relight stage's
+// targets are worth against the ground truth.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -65,6 +72,7 @@ int main(int argc, char** argv) try {
     const Mat4 m2w = model.world_to_model.inverse();
     const double t0 = Progress::steady_seconds();
     double coverage = 0;
+    std::vector<float> spreads;  // the events' depth spread per pixel, in pixel footprints
     for (size_t v = 0; v < data.cameras.size(); ++v) {
         const Camera& cam = data.cameras[v];
         const int W = data.width, H = data.height;
@@ -108,6 +116,7 @@ int main(int argc, char** argv) try {
                 Vec3 n(0.0f);
                 float rough = 0.0f;
                 int hits = 0;
+                double t_sum = 0, t_sq = 0;
                 Vec3 mean_position(0.0f);
                 int events = 0;
                 for (int s = 0; at_mode == "mean" && s < spp; ++s) {
@@ -124,6 +133,9 @@ int main(int argc, char** argv) try {
                     const size_t i = (size_t(y) * W + x) * spp + s;
                     const WaveRay& r = rays[i];
                     if (!r.has_event) continue;
+                    const double t = length(r.event_position - r.ray.o);
+                    t_sum += t;
+                    t_sq += t * t;
                     Vec3 nm;
                     if (fitted) {
                         const IntrinsicSample is = at_mode == "mean" ? at_mean : intrinsic.query(r.event_position);
@@ -141,6 +153,12 @@ int main(int argc, char** argv) try {
                     ++hits;
                 }
                 coverage += double(hits) / spp;
+                if (hits == spp && spp > 1) {
+                    const double mean_t = t_sum / hits, var = std::max(0.0, t_sq / hits - mean_t * mean_t);
+                    const double footprint =
+                        mean_t / double(cam.fx);  // model units per pixel at that distance
+                    if (footprint > 0) spreads.push_back(float(std::sqrt(var) / footprint));
+                }
                 // Averaged over the draws that found an event, as the renderer's first-hit AOVs are (not
                 // darkened where some rays miss: the ground truth is compared unpremultiplied).
                 const float inv = hits ? 1.0f / float(hits) : 0.0f;
@@ -162,6 +180,13 @@ int main(int argc, char** argv) try {
                : normals_mode == "depth" ? fmt::format("depth, {} px", normal_pixels) : normals_mode,
                backend_name.empty() ? "auto" : backend_name, secs,
                coverage / (double(data.cameras.size()) * data.width * data.height));
+    if (!spreads.empty()) {
+        std::sort(spreads.begin(), spreads.end());
+        fmt::print(
+            "events' depth spread (std, pixel footprints) over {} fully covered pixels: median {:.2f}, "
+            "90th percentile {:.2f}\n",
+            spreads.size(), spreads[spreads.size() / 2], spreads[spreads.size() * 9 / 10]);
+    }
     return 0;
 } catch (const std::exception& e) {
     fmt::print(stderr, "relight_fields: error: {}\n", e.what());
