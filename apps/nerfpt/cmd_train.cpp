@@ -74,12 +74,6 @@ CLI::App* add_train_command(CLI::App& app, TrainArgs& args) {
                                 "the config's (0, off). Not with --resume: a model keeps its config",
                                 k_relightable_surface_smoothness))
         ->check(CLI::Range(0.0, 1e6));
-    cmd->add_option(
-           "--depth-spread", args.depth_spread,
-           "Weight of a loss that thins the density's shell about the surface: the variance of each "
-           "ray's stopping depth in pixels (the config's loss.depth_spread). Default: the config's (0, "
-           "off). Not with --resume: a model keeps its config")
-        ->check(CLI::Range(0.0, 1e6));
     add_backend_option(cmd, args.backend);
     cmd->add_flag(
         "--relightable", args.relightable,
@@ -263,9 +257,6 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
         if (args.surface_smoothness >= 0.0f)
             throw Error("--surface-smoothness: a resumed model keeps the config it was trained with (stored in '" +
                         out.string() + "')");
-        if (args.depth_spread >= 0.0f)
-            throw Error("--depth-spread: a resumed model keeps the config it was trained with (stored in '" +
-                        out.string() + "')");
         model = nerf::load_model(out);
         if (!model.training)
             throw Error("--resume: '" + out.string() + "' was saved without its training state");
@@ -283,7 +274,6 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
             config.loss.surface_smoothness = args.surface_smoothness;
         else if (args.relightable && args.config.empty())
             config.loss.surface_smoothness = k_relightable_surface_smoothness;
-        if (args.depth_spread >= 0.0f) config.loss.depth_spread = args.depth_spread;
         model =
             nerf::create_model(config, data.aabb_scale, nerf::ngp_world_to_model(data.scale, data.offset));
     }
@@ -400,14 +390,12 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
             pt.march, pt.forward, pt.loss, pt.backward, pt.grid_backward, pt.adam, pt.occupancy);
     save();
     interrupts.set_cooperative(false);
-    fmt::print(
-        "wrote {} after {} steps ({} of training), last batch psnr {:.2f} dB{}{}\n", out.string(),
-        trainer.steps_done(), format_seconds(model.training->elapsed_seconds), nerf::psnr_from_mse(stats.mse),
-        model.config.loss.surface_smoothness > 0.0f
-            ? fmt::format(", surface-smoothness loss {:.5f}", stats.smoothness)
-            : std::string(),
-        model.config.loss.depth_spread > 0.0f ? fmt::format(", depth-spread loss {:.5f}", stats.depth_spread)
-                                              : std::string());
+    fmt::print("wrote {} after {} steps ({} of training), last batch psnr {:.2f} dB{}\n", out.string(),
+               trainer.steps_done(), format_seconds(model.training->elapsed_seconds),
+               nerf::psnr_from_mse(stats.mse),
+               model.config.loss.surface_smoothness > 0.0f
+                   ? fmt::format(", surface-smoothness loss {:.5f}", stats.smoothness)
+                   : std::string());
     if (observer) {
         observer->on_snapshot(model, trainer.steps_done());  // the model as saved: its held-out PSNR
         observer->on_finish(trainer.steps_done(), model.training->elapsed_seconds, interrupted);

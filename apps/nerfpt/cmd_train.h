@@ -31,7 +31,6 @@ struct TrainArgs {
     // < 0: k_relightable_surface_smoothness with --relightable and no --config, else the config's
     // loss.surface_smoothness.
     float surface_smoothness = -1.0f;
-    float depth_spread = -1.0f;  // < 0: the config's loss.depth_spread
     bool resume = false;
     bool relightable = false;        // run the relight stage after training (relight_stage.h)
     RelightStageOptions relight;  // --relight-*; steps, points and batch of 0 are the stage's defaults

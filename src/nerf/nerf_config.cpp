@@ -248,8 +248,6 @@ NerfConfig config_from_json(const json& j, const std::string& source, const Nerf
         r.read_float("surface_smoothness", c.loss.surface_smoothness, 0.0, 1e6, false, false);
         r.read_float("smoothness_spacing", c.loss.smoothness_spacing, 1.0, 256.0, false, false);
         r.read_float("smoothness_scale", c.loss.smoothness_scale, 0.0, 1e3, true, false);
-        r.read_float("depth_spread", c.loss.depth_spread, 0.0, 1e6, false, false);
-        r.read_float("spread_scale", c.loss.spread_scale, 0.0, 1e3, true, false);
         r.check_no_unknown();
     }
     {
@@ -307,9 +305,7 @@ json config_to_json(const NerfConfig& c) {
     j["loss"] = {{"huber_delta", float_for_json(c.loss.huber_delta)},
                  {"surface_smoothness", float_for_json(c.loss.surface_smoothness)},
                  {"smoothness_spacing", float_for_json(c.loss.smoothness_spacing)},
-                 {"smoothness_scale", float_for_json(c.loss.smoothness_scale)},
-                 {"depth_spread", float_for_json(c.loss.depth_spread)},
-                 {"spread_scale", float_for_json(c.loss.spread_scale)}};
+                 {"smoothness_scale", float_for_json(c.loss.smoothness_scale)}};
     const TrainingConfig& t = c.training;
     j["training"] = {{"batch_samples", t.batch_samples},
                      {"max_rays_per_batch", t.max_rays_per_batch},

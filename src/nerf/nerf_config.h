@@ -74,11 +74,6 @@ struct LossConfig {
     float surface_smoothness = 0.0f;
     float smoothness_spacing = 4.0f;
     float smoothness_scale = 0.2f;
-    // The depth-spread loss (depth_spread.h): its weight per ray on the variance of the ray's termination
-    // depth in squared pixel footprints (0: off), and the spread in pixels beyond which it lets go. A
-    // thinner density shell about the surface.
-    float depth_spread = 0.0f;
-    float spread_scale = 1.0f;
 };
 
 struct TrainingConfig {

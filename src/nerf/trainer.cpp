@@ -10,7 +10,6 @@
 #include "core/memory.h"
 #include "core/rng.h"
 #include "nerf/composite.h"
-#include "nerf/depth_spread.h"
 #include "nerf/field_batch.h"
 #include "nerf/loss.h"
 #include "nerf/surface_smoothness.h"
@@ -29,8 +28,6 @@ struct TrainRay {
     uint32_t first = 0, count = 0;  // samples [first, first + count) of the batch
     uint32_t image = 0;
     Rgb target, background;
-    Vec3 origin;             // the camera centre, model space (the depth-spread loss's footprint)
-    float inv_focal = 0.0f;  // 1 / focal length in pixels
 };
 
 }  // namespace
@@ -170,8 +167,6 @@ StepStats Trainer::compute_gradient() try {
             const Ray world = generate_pixel_ray(cam, draw.px, draw.py);
             const Ray model{w2m.transform_point(world.o), normalize(w2m.transform_vector(world.d))};
             ray_dirs[r] = model.d;
-            tr.origin = model.o;
-            tr.inv_focal = 1.0f / cam.fx;
             const int n = march_ray(m_march, grid, model, draw.jitter, buf.data());
             tr.count = uint32_t(n);
             out.insert(out.end(), buf.begin(), buf.begin() + n);
@@ -229,8 +224,6 @@ StepStats Trainer::compute_gradient() try {
     std::vector<Rgb> d_rgb(n_samples);
     std::vector<double> ray_loss(n_kept), ray_se(n_kept);
     std::vector<uint32_t> ray_used(n_kept);  // samples before the ray's early stop: those with a gradient
-    const float spread_weight = cfg.loss.depth_spread;
-    std::vector<double> ray_spread(spread_weight > 0.0f ? n_kept : 0);
     const bool exposure = !st.exposure.empty();
     std::vector<Rgb> ray_d_log_gain(exposure ? n_kept : 0);
     const float inv_rays = 1.0f / float(std::max<size_t>(n_kept, 1));
@@ -260,18 +253,6 @@ StepStats Trainer::compute_gradient() try {
         if (tr.count > 0)
             composite_backward(&sigma[tr.first], &rgb[tr.first], &dts[tr.first], int(tr.count), fwd,
                                tr.background, grad * inv_rays, &d_sigma[tr.first], &d_rgb[tr.first]);
-        if (spread_weight > 0.0f && fwd.used > 0) {
-            const SurfacePoint sp =
-                surface_point(&sigma[tr.first], &positions[tr.first], &dts[tr.first], fwd.used);
-            const DepthSpreadTerm term =
-                depth_spread_term(&sigma[tr.first], &positions[tr.first], &dts[tr.first], fwd.used, sp,
-                                  tr.origin, ray_dirs[r], tr.inv_focal, spread_weight, cfg.loss.spread_scale);
-            if (term.active) {
-                ray_spread[r] = term.loss;
-                depth_spread_backward_add(&sigma[tr.first], &positions[tr.first], &dts[tr.first], fwd.used,
-                                          sp, ray_dirs[r], term, inv_rays, &d_sigma[tr.first]);
-            }
-        }
         return fwd;
     };
     std::vector<double> group_smoothness;
@@ -359,9 +340,6 @@ StepStats Trainer::compute_gradient() try {
         for (double v : group_smoothness) smooth += v;
         stats.smoothness = group_smoothness.empty() ? 0.0 : smooth / double(group_smoothness.size());
     }
-    double spread = 0;
-    for (double v : ray_spread) spread += v;
-    stats.depth_spread = ray_spread.empty() ? 0.0 : spread / double(ray_spread.size());
     stats.mse = n_kept ? se / (3.0 * n_kept) : 0.0;
     stats.rays = uint32_t(n_kept);
     stats.samples = uint32_t(n_used);

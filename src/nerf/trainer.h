@@ -19,7 +19,6 @@ struct StepStats {
     double loss = 0;          // mean Huber loss per ray (summed over channels)
     double mse = 0;           // mean squared error per channel, for a training PSNR
     double smoothness = 0;    // mean surface-smoothness loss per group of rays (0 when it is off)
-    double depth_spread = 0;  // mean depth-spread loss per ray (0 when it is off)
     uint32_t rays = 0;        // rays in the batch
     uint32_t samples = 0;     // samples trained on: those before each ray's early stop
     uint32_t marched = 0;     // samples marched and evaluated (the CPU trainer evaluates them all)

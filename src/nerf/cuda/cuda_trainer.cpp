@@ -61,8 +61,7 @@ struct CudaTrainer::Impl {
     // Per ray.
     DeviceBuffer<uint32_t> ray_first, ray_count;
     DeviceBuffer<Rgb> ray_target, ray_background;
-    DeviceBuffer<Vec3> ray_dir, ray_origin;
-    DeviceBuffer<float> ray_inv_focal;
+    DeviceBuffer<Vec3> ray_dir;
     DeviceBuffer<float4> march_scratch;
     // Per marched sample.
     DeviceBuffer<Vec3> s_pos;
@@ -164,8 +163,6 @@ void CudaTrainer::Impl::setup() {
     ray_target.allocate(max_rays, "the ray buffers", k_lower_batch);
     ray_background.allocate(max_rays, "the ray buffers", k_lower_batch);
     ray_dir.allocate(max_rays, "the ray buffers", k_lower_batch);
-    ray_origin.allocate(max_rays, "the ray buffers", k_lower_batch);
-    ray_inv_focal.allocate(max_rays, "the ray buffers", k_lower_batch);
     march_scratch.allocate(size_t(max_rays) * k_march_scratch, "the ray buffers", k_lower_batch);
     s_pos.allocate(capacity, "the sample buffers", k_lower_batch);
     s_dt.allocate(capacity, "the sample buffers", k_lower_batch);
@@ -193,8 +190,7 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     mark(m_begin);
     cuda_check(cudaMemsetAsync(counters.data(), 0, sizeof(StepCounters), stream), "cudaMemsetAsync");
     StepCounters* ctr = counters.data();
-    RayBuffers rays{ray_first.data(), ray_count.data(),  ray_target.data(),   ray_background.data(),
-                    ray_dir.data(),   ray_origin.data(), ray_inv_focal.data()};
+    RayBuffers rays{ray_first.data(), ray_count.data(), ray_target.data(), ray_background.data(), ray_dir.data()};
     SampleBuffers samples{s_pos.data(), s_dt.data(), s_ray.data(), capacity};
 
     MarchRaysArgs ma;
@@ -244,8 +240,6 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     ca.huber_delta = lc.huber_delta;
     ca.smoothness_weight = lc.surface_smoothness;
     ca.smoothness_scale = lc.smoothness_scale;
-    ca.depth_spread = lc.depth_spread;
-    ca.spread_scale = lc.spread_scale;
     ca.compact = {c_pos.data(), c_ray.data(), c_d_sigma.data(), c_d_rgb.data(), capacity};
     ca.counters = ctr;
     composite_loss(ca, stream);
@@ -287,8 +281,6 @@ StepStats CudaTrainer::Impl::stats_after(uint32_t n_rays, double seconds) {
     s.mse = c.rays_kept ? c.squared_error / (3.0 * c.rays_kept) : 0.0;
     if (model.config.loss.surface_smoothness > 0.0f)
         s.smoothness = c.smoothness / double((n_rays + k_smoothness_group - 1) / k_smoothness_group);
-    if (model.config.loss.depth_spread > 0.0f)
-        s.depth_spread = c.rays_kept ? c.depth_spread / c.rays_kept : 0.0;
     s.seconds = seconds;
     return s;
 }

@@ -5,7 +5,6 @@
 #include "nerf/composite.h"
 #include "nerf/cuda/occupancy_kernels.h"
 #include "nerf/loss.h"
-#include "nerf/depth_spread.h"
 #include "nerf/surface_smoothness.h"
 #include "nerf/train_pixel.h"
 
@@ -20,7 +19,6 @@ struct TrainRay {
     Ray ray;
     Rgb target, background;
     float jitter;
-    float inv_focal;
 };
 __device__ __forceinline__ TrainRay setup_ray(const MarchRaysArgs& a, uint32_t r) {
     const DeviceImages& im = a.images;
@@ -36,7 +34,6 @@ __device__ __forceinline__ TrainRay setup_ray(const MarchRaysArgs& a, uint32_t r
     t.target = rgb * alpha + t.background * (1.0f - alpha);
     t.ray = pixel_ray(im.cameras[draw.image], draw.px, draw.py);
     t.jitter = draw.jitter;
-    t.inv_focal = 1.0f / im.cameras[draw.image].fx;
     return t;
 }
 
@@ -47,8 +44,6 @@ __device__ __forceinline__ void write_ray(const MarchRaysArgs& a, uint32_t r, co
     a.rays.target[r] = t.target;
     a.rays.background[r] = t.background;
     a.rays.dir[r] = t.ray.d;
-    a.rays.origin[r] = t.ray.o;
-    a.rays.inv_focal[r] = t.inv_focal;
 }
 
 __global__ void __launch_bounds__(k_block) march_training_rays_kernel(MarchRaysArgs a) {
@@ -222,65 +217,50 @@ __device__ __forceinline__ bool ray_forward(const CompositeLossArgs& a, uint32_t
 }
 
 // Compacts ray r's samples before its stop with their gradient (not yet divided by the number of rays: the MLP
-// kernel does); with a smoothness term, its gradient d_point through the ray's surface point is added, and
-// with the depth-spread loss its gradient (its loss added to *spread).
+// kernel does); with a smoothness term, its gradient d_point through the ray's surface point is added.
 __device__ __forceinline__ void ray_backward(const CompositeLossArgs& a, uint32_t r, const CompositeResult& fwd,
-                                             Rgb grad, const SurfacePoint* point, Vec3 d_point, double* spread) {
+                                             Rgb grad, const SurfacePoint* point, Vec3 d_point) {
     const uint32_t used = uint32_t(fwd.used);
     if (used == 0) return;
     const uint32_t first = a.rays.first[r];
     const uint32_t c = atomicAdd(&a.counters->compacted, used);
     if (uint64_t(c) + used > a.compact.capacity) return;
     const float* dt = a.samples.dt + first;
-    const Vec3* pos = a.samples.pos + first;
     composite_backward(a.sigma + first, a.rgb + first, dt, int(used), fwd, a.rays.background[r], grad,
                        a.compact.d_sigma + c, a.compact.d_rgb + c);
     if (point)
-        surface_point_backward_add(a.sigma + first, pos, dt, int(used), *point, d_point, a.compact.d_sigma + c);
-    if (a.depth_spread > 0.0f) {
-        const SurfacePoint sp = point ? *point : surface_point(a.sigma + first, pos, dt, int(used));
-        const DepthSpreadTerm term = depth_spread_term(a.sigma + first, pos, dt, int(used), sp, a.rays.origin[r],
-                                                       a.rays.dir[r], a.rays.inv_focal[r], a.depth_spread,
-                                                       a.spread_scale);
-        if (term.active) {
-            *spread += term.loss;
-            depth_spread_backward_add(a.sigma + first, pos, dt, int(used), sp, a.rays.dir[r], term, 1.0f,
-                                      a.compact.d_sigma + c);
-        }
-    }
+        surface_point_backward_add(a.sigma + first, a.samples.pos + first, dt, int(used), *point, d_point,
+                                   a.compact.d_sigma + c);
     for (uint32_t j = 0; j < used; ++j) {
         a.compact.pos[c + j] = a.samples.pos[first + j];
         a.compact.ray[c + j] = r;
     }
 }
 
-__device__ __forceinline__ void add_counters(const CompositeLossArgs& a, double loss, double se, double smooth,
-                                             double spread) {
+__device__ __forceinline__ void add_counters(const CompositeLossArgs& a, double loss, double se, double smooth) {
     loss = warp_sum(loss);
     se = warp_sum(se);
     smooth = warp_sum(smooth);
-    spread = warp_sum(spread);
-    if ((threadIdx.x & 31) == 0 && (loss != 0.0 || se != 0.0 || smooth != 0.0 || spread != 0.0)) {
+    if ((threadIdx.x & 31) == 0 && (loss != 0.0 || se != 0.0 || smooth != 0.0)) {
         atomicAdd(&a.counters->loss, loss);
         atomicAdd(&a.counters->squared_error, se);
         if (smooth != 0.0) atomicAdd(&a.counters->smoothness, smooth);
-        if (spread != 0.0) atomicAdd(&a.counters->depth_spread, spread);
     }
 }
 
 __global__ void __launch_bounds__(k_block) composite_loss_kernel(CompositeLossArgs a) {
     const uint32_t r = blockIdx.x * blockDim.x + threadIdx.x;
-    double loss = 0.0, se = 0.0, spread = 0.0;
+    double loss = 0.0, se = 0.0;
     CompositeResult fwd;
     Rgb grad;
-    if (ray_forward(a, r, &fwd, &grad, &loss, &se)) ray_backward(a, r, fwd, grad, nullptr, Vec3(0.0f), &spread);
-    add_counters(a, loss, se, 0.0, spread);
+    if (ray_forward(a, r, &fwd, &grad, &loss, &se)) ray_backward(a, r, fwd, grad, nullptr, Vec3(0.0f));
+    add_counters(a, loss, se, 0.0);
 }
 
 // With the smoothness loss: a thread per group of rays (train_pixel.h); the term where all three were kept.
 __global__ void __launch_bounds__(k_block) composite_group_loss_kernel(CompositeLossArgs a) {
     const uint32_t g = blockIdx.x * blockDim.x + threadIdx.x;
-    double loss = 0.0, se = 0.0, smooth = 0.0, spread = 0.0;
+    double loss = 0.0, se = 0.0, smooth = 0.0;
     CompositeResult fwd[k_smoothness_group];
     Rgb grad[k_smoothness_group];
     SurfacePoint points[k_smoothness_group];
@@ -301,8 +281,8 @@ __global__ void __launch_bounds__(k_block) composite_group_loss_kernel(Composite
     for (uint32_t k = 0; k < k_smoothness_group; ++k)
         if (kept[k])
             ray_backward(a, g * k_smoothness_group + k, fwd[k], grad[k], term.active ? &points[k] : nullptr,
-                         term.d_point[k], &spread);
-    add_counters(a, loss, se, smooth, spread);
+                         term.d_point[k]);
+    add_counters(a, loss, se, smooth);
 }
 
 int blocks_for(uint32_t n) { return int((n + k_block - 1) / k_block); }

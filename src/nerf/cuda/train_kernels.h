@@ -35,7 +35,6 @@ struct StepCounters {
     double loss = 0;         // sum over kept rays of the Huber loss (summed over channels)
     double squared_error = 0;
     double smoothness = 0;   // sum over groups of the surface-smoothness loss
-    double depth_spread = 0;  // sum over rays of the depth-spread loss
 };
 
 struct RayBuffers {
@@ -44,8 +43,6 @@ struct RayBuffers {
     Rgb* target = nullptr;
     Rgb* background = nullptr;
     Vec3* dir = nullptr;        // unit, model space
-    Vec3* origin = nullptr;     // the camera centre, model space (the depth-spread loss's footprint)
-    float* inv_focal = nullptr;  // 1 / focal length in pixels
 };
 
 struct SampleBuffers {
@@ -93,8 +90,6 @@ struct CompositeLossArgs {
     float huber_delta = 1.0f;
     float smoothness_weight = 0.0f;  // > 0: the surface-smoothness loss (surface_smoothness.h), rays in groups
     float smoothness_scale = 0.2f;
-    float depth_spread = 0.0f;  // > 0: the depth-spread loss's weight (depth_spread.h)
-    float spread_scale = 1.0f;
     CompactBuffers compact;
     StepCounters* counters = nullptr;
 };
