@@ -158,8 +158,9 @@ TEST(ObjectIsolation, TheTableLayerKeepsOnlyTheObjectsFootprint) {
     IsolationInput in = input();
     in.min_step = 1.0f / (2.0f * k_res);  // density 1: opacity 1 - e^-2 = 0.86 across a cell, dense
     std::vector<float> d = grid_of([](Vec3 p) { return in_table_layer(p) || in_cylinder(p); });
-    const IsolationSettings s;  // a layer of 2 cells, the footprint widened by 1 cell
-    ASSERT_EQ(s.table_layer_cells, 2.0);
+    IsolationSettings s;  // a layer of 2 cells (the slab's geometry is laid out for it), footprint + 1 cell
+    s.table_layer_cells = 2.0;
+    ASSERT_EQ(s.footprint_margin_cells, 1.0);
     const IsolationStats st = isolate_object(d, in, s);
     int64_t cut = 0;
     for (size_t i = 0; i < d.size(); ++i) {
@@ -198,7 +199,8 @@ TEST(ObjectIsolation, TheFootprintIsTheFootsNotTheOverhangs) {
     in.min_step = 1.0f / (2.0f * k_res);  // density 1: dense
     const auto mushroom = [](Vec3 p) { return in_table_layer(p) || in_stem(p) || in_cap(p); };
     std::vector<float> d = grid_of(mushroom);
-    const IsolationSettings s;
+    IsolationSettings s;
+    s.table_layer_cells = 2.0;  // the cap is 6 cells above this layer
     ASSERT_EQ(s.footprint_slab_cells, 4.0);
     isolate_object(d, in, s);
     int64_t under_cap = 0, kept_under_cap = 0;
