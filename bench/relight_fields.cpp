@@ -4,8 +4,8 @@
 // `albedo_N.exr` / `normal_N.exr` (and `roughness_N.exr`, grey) for
 // ../shared/data/relight/score.py (run it with --normals-zup). Prints a table of time and coverage.
 //   relight_fields MODEL.npt DATA/transforms_test.json OUT_DIR [--spp 8] [--backend cpu|cuda]
-//                  [--normals predicted|density|depth] [--normal-step 0.004] [--normal-pixels 2] [--at
-//                  events|mean]
+//                  [--normals predicted|density|depth] [--normal-step 0.004] [--normal-pixels 2]
+//                  [--at events|mean]
 // Also prints the events' spread in depth: per pixel with events on every draw, the standard deviation of
 // their distance along the camera ray, in units of the pixel's footprint at that distance (median and 90th
 // percentile over the views' pixels). Draws of one pixel pass through different places in it, so a slanted
@@ -155,8 +155,8 @@ int main(int argc, char** argv) try {
                 coverage += double(hits) / spp;
                 if (hits == spp && spp > 1) {
                     const double mean_t = t_sum / hits, var = std::max(0.0, t_sq / hits - mean_t * mean_t);
-                    const double footprint =
-                        mean_t / double(cam.fx);  // model units per pixel at that distance
+                    // Model units per pixel at that distance.
+                    const double footprint = mean_t / double(cam.fx);
                     if (footprint > 0) spreads.push_back(float(std::sqrt(var) / footprint));
                 }
                 // Averaged over the draws that found an event, as the renderer's first-hit AOVs are (not
