@@ -37,8 +37,10 @@ namespace fs = std::filesystem;
 namespace {
 
 // Automatic --downscale: the training images' longest side at most this. A few minutes of CPU training
-// cannot resolve more detail, and smaller images load faster and take less memory.
-constexpr int k_auto_train_side = 400;
+// cannot resolve more detail, and smaller images load faster and take less memory. 480 (was 400): with half
+// the rays on the object, a 540x960 capture's object is sharper at 270x480 than at 180x320 at every size it
+// was scored (docs/benchmarks.md, "Training rays on the object").
+constexpr int k_auto_train_side = 480;
 constexpr int k_stages = 8;
 const char* const k_stage_names[k_stages] = {"curate", "poses", "object",  "split",
                                              "train",  "eval",  "isolate", "turntable"};
@@ -410,6 +412,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
         t.config = resume ? std::string() : args.config;
         t.resume = resume;
         t.resume_hint = continue_hint;
+        t.subject_box = subject_box_of_record(record.stage("object"));
         t.relightable = args.relightable;
         t.relight.steps = args.relight_steps;
         t.relight.points = args.relight_points;

@@ -17,6 +17,7 @@
 #include "interrupt.h"
 #include "nerf/dataset.h"
 #include "nerf/model_file.h"
+#include "nerf/subject_focus.h"
 #include "nerf/trainer.h"
 #include "relight_stage.h"
 #include "status_line.h"
@@ -264,6 +265,8 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     const bool tty = stream_is_tty(stderr);
     nerf::Dataset data = load_dataset_with_progress(args.data, args.split, args.downscale, global.quiet);
     refuse_overwriting_inputs(out, "--output", dataset_inputs(data));
+    // A few pixels around the box's projection: the lens's distortion is not in it.
+    if (args.subject_box) data.subject_rects = nerf::subject_rects(data.cameras, *args.subject_box, 4.0f);
     // Resolved once the input is known to be good: the CPU fallback's note never precedes an input error.
     const nerf::Backend backend = resolve_backend(args.backend);
     if (!args.resume) {
@@ -285,6 +288,15 @@ int run_train(const TrainArgs& args, const GlobalSettings& global, InterruptGuar
     spdlog::info("training on {} frames of {}x{}, aabb_scale {}, {} parameters{}", data.cameras.size(),
                  data.width, data.height, data.aabb_scale, model.params.size(),
                  args.resume ? fmt::format(", resuming at step {}", model.training->adam.step) : "");
+    if (!data.subject_rects.empty()) {
+        double share = 0;
+        for (const nerf::PixelRect& r : data.subject_rects)
+            share += double(r.x1 - r.x0) * (r.y1 - r.y0) / (double(data.width) * data.height);
+        spdlog::info(
+            "{:.0f}% of the rays drawn where the images see the object (its box: {:.0f}% of an image on "
+            "average)",
+            100.0 * model.config.training.subject_rays, 100.0 * share / double(data.subject_rects.size()));
+    }
 
     std::unique_ptr<nerf::TrainerBackend> trainer_ptr = nerf::make_trainer(backend, model, data);
     nerf::TrainerBackend& trainer = *trainer_ptr;

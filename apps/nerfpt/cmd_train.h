@@ -3,10 +3,13 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "common.h"
+#include "core/vec.h"
 #include "live_training.h"
 #include "nerf/training_observer.h"
 #include "relight_stage.h"
@@ -41,6 +44,10 @@ struct TrainArgs {
     bool force = false;
     // The command that continues after an interrupt, printed then; empty: this train command with --resume.
     std::string resume_hint;
+    // The corners of a box that holds the subject, in the data's world (nerfpt capture: the object stage's
+    // box): training.subject_rays of each step's rays are drawn where the training images see it
+    // (subject_focus.h).
+    std::optional<std::array<Vec3, 8>> subject_box;
     LiveServeArgs serve;  // --serve: the live-training page (live_training.h)
     // Watches the training instead of a page of its own (nerfpt capture --serve passes its page's); not owned.
     nerf::TrainingObserver* observer = nullptr;

@@ -145,6 +145,28 @@ std::optional<nerf::ObjectFrame> object_frame_of_record(const nlohmann::json& re
     return nerf::object_frame_from_json(record["model_frame"], "capture.json: object.model_frame");
 }
 
+std::optional<std::array<Vec3, 8>> subject_box_of_record(const nlohmann::json& record) {
+    if (!record.is_object() || !record.value("found", false)) return std::nullopt;
+    // The first box, from sparse points (kept under "sparse" once a model refined it): what a capture has
+    // before its first training, so that a retrained capture draws the same rays.
+    nlohmann::json sparse = record;
+    if (const auto it = record.find("sparse"); it != record.end())
+        for (const char* key : {"box", "height", "base_center"}) sparse[key] = (*it)[key];
+    const capture::subject::SubjectGeometry g = geometry_of_record(sparse);
+    // Widened: the refined boxes of the development captures are up to 1.3 times the first one across, and
+    // the object's contact with the table and its top's haze are trained too.
+    const Vector3d c = (g.box_min + g.box_max) * 0.5, half = (g.box_max - g.box_min) * 0.5;
+    const double widen = 1.3, z_lo = g.box_min.z() - 0.05 * g.height, z_hi = g.box_max.z() + 0.1 * g.height;
+    std::array<Vec3, 8> corners;
+    for (int i = 0; i < 8; ++i) {
+        const double x = c.x() + (i & 1 ? 1 : -1) * half.x() * widen,
+                     y = c.y() + (i & 2 ? 1 : -1) * half.y() * widen;
+        const Vector3d p = g.base_center + x * g.x_axis + y * g.y_axis + (i & 4 ? z_hi : z_lo) * g.up;
+        corners[size_t(i)] = Vec3(float(p.x()), float(p.y()), float(p.z()));
+    }
+    return corners;
+}
+
 ObjectAttach attach_object(const fs::path& path, nlohmann::json& record, double height_m, bool retrained) {
     ObjectAttach out;
     if (!record.value("found", false)) return out;

@@ -2,6 +2,7 @@
 // cameras (capture/subject/), turned into the object frame that capture.json records and the model carries.
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -25,6 +26,10 @@ ObjectStageResult object_stage(const std::filesystem::path& colmap_model, double
 
 // The object frame recorded in capture.json's `object` entry, if it has one.
 std::optional<nerf::ObjectFrame> object_frame_of_record(const nlohmann::json& record);
+
+// The corners of the recorded object's box in the training world, widened to take in what the first box from
+// sparse points misses (the refined box is wider), for training's subject rays; nullopt without an object.
+std::optional<std::array<Vec3, 8>> subject_box_of_record(const nlohmann::json& record);
 
 // After training: refines the recorded box with the model's occupancy grid (capture/subject's
 // refine_box_with_field; redone when `retrained` or the model's step count differs from the one recorded), updates `record`

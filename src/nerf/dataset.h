@@ -13,6 +13,7 @@
 #include "core/transform.h"
 #include "core/vec.h"
 #include "nerf/lens_distortion.h"
+#include "nerf/train_pixel.h"
 
 namespace npt::nerf {
 
@@ -44,6 +45,9 @@ struct Dataset {
     // uses for NeRF-synthetic, so they are the defaults when the json names none.
     float scale = 0.33f;
     Vec3 offset{0.5f, 0.5f, 0.5f};
+    // Empty, or one per image: where the subject is seen (subject_focus.h); training draws its share of rays
+    // there (training.subject_rays). Pixel coordinates of this size: set after downscaling.
+    std::vector<PixelRect> subject_rects;
 
     size_t image_bytes() const { return size_t(width) * size_t(height) * 4; }
     const uint8_t* image(size_t i) const { return rgba.data() + i * image_bytes(); }

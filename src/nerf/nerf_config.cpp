@@ -261,6 +261,7 @@ NerfConfig config_from_json(const json& j, const std::string& source, const Nerf
         r.read_bool("random_background", t.random_background);
         r.read_bool("exposure_per_image", t.exposure_per_image);
         r.read_float("exposure_learning_rate", t.exposure_learning_rate, 0.0, 1.0, true, false);
+        r.read_float("subject_rays", t.subject_rays, 0.0, 1.0, false, false);
         r.check_no_unknown();
     }
     return c;
@@ -314,7 +315,8 @@ json config_to_json(const NerfConfig& c) {
                      {"checkpoint_interval", t.checkpoint_interval},
                      {"random_background", t.random_background},
                      {"exposure_per_image", t.exposure_per_image},
-                     {"exposure_learning_rate", float_for_json(t.exposure_learning_rate)}};
+                     {"exposure_learning_rate", float_for_json(t.exposure_learning_rate)},
+                     {"subject_rays", float_for_json(t.subject_rays)}};
     return j;
 }
 

@@ -91,6 +91,9 @@ struct TrainingConfig {
     // exposure and white balance drift. CPU trainer only.
     bool exposure_per_image = false;
     float exposure_learning_rate = 2e-3f;
+    // With subject rectangles in the data set (nerfpt capture's object box): the share of each step's rays
+    // drawn inside them, the rest over the whole image (train_pixel.h).
+    float subject_rays = 0.5f;
 };
 
 struct NerfConfig {

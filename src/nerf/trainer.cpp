@@ -142,6 +142,8 @@ StepStats Trainer::compute_gradient() try {
     const OccupancyGridView grid = m_model.occupancy.view();
     const Mat4& w2m = m_model.world_to_model;
     const size_t n_images = m_data.cameras.size();
+    const SubjectFocus focus{m_data.subject_rects.size() == n_images ? m_data.subject_rects.data() : nullptr,
+                             cfg.training.subject_rays};
 
     // 1. Rays and their samples, marched per task of k_rays_per_task rays.
     const size_t n_tasks = (n_rays + k_rays_per_task - 1) / k_rays_per_task;
@@ -153,8 +155,9 @@ StepStats Trainer::compute_gradient() try {
         auto& out = task_samples[task];
         const size_t end = std::min<size_t>(n_rays, (task + 1) * k_rays_per_task);
         for (size_t r = task * k_rays_per_task; r < end; ++r) {
-            const TrainPixel draw = draw_train_pixel(step_seed, uint32_t(r), uint32_t(n_images), m_data.width,
-                                                     m_data.height, cfg.training.random_background, spacing);
+            const TrainPixel draw =
+                draw_train_pixel(step_seed, uint32_t(r), uint32_t(n_images), m_data.width, m_data.height,
+                                 cfg.training.random_background, spacing, focus);
             const Camera& cam = m_data.cameras[draw.image];
             const int ix = std::min(int(draw.px), m_data.width - 1), iy = std::min(int(draw.py), m_data.height - 1);
             const uint8_t* pix = m_data.image(draw.image) + (size_t(iy) * m_data.width + ix) * 4;

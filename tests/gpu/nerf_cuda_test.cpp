@@ -189,11 +189,17 @@ TEST(NerfCuda, TheObjectAloneMatchesTheCpu) {
 }
 
 // The gradient of one batch (the same rays: both trainers draw them from (seed, step, ray)) on both backends,
-// with the surface-smoothness loss at `smoothness` (0: off; its rays come in groups of three).
-void expect_gradient_matches_the_cpu(float smoothness) {
-    const Dataset train = test::make_sphere_scene({.views = 10, .size = 32, .view_seed = 1});
+// with the surface-smoothness loss at `smoothness` (0: off; its rays come in groups of three), and with
+// `focus` most rays drawn in a rectangle of each image (train_pixel.h's subject rays).
+void expect_gradient_matches_the_cpu(float smoothness, bool focus = false) {
+    Dataset train = test::make_sphere_scene({.views = 10, .size = 32, .view_seed = 1});
     NerfConfig cfg = gpu_sphere_config();
     cfg.loss.surface_smoothness = smoothness;
+    if (focus) {
+        for (size_t i = 0; i < train.cameras.size(); ++i)
+            train.subject_rects.push_back({4.0f + float(i), 6.0f, 20.0f + float(i), 26.5f});
+        cfg.training.subject_rays = 0.8f;
+    }
     cfg.training.batch_samples = 1 << 20;       // the CPU keeps every ray
     cfg.training.cuda_batch_samples = 1 << 17;  // and so does the GPU (its sample buffer holds 8x this)
     NerfModel base = create_model(cfg, train.aabb_scale, ngp_world_to_model(train.scale, train.offset));
@@ -243,6 +249,8 @@ void expect_gradient_matches_the_cpu(float smoothness) {
 }
 
 TEST(NerfCuda, GradientOfABatchMatchesTheCpuTrainer) { expect_gradient_matches_the_cpu(0.0f); }
+
+TEST(NerfCuda, GradientWithSubjectRaysMatchesTheCpuTrainer) { expect_gradient_matches_the_cpu(0.0f, true); }
 
 TEST(NerfCuda, GradientWithTheSurfaceSmoothnessLossMatchesTheCpuTrainer) {
     // A weight at which the smoothness term is a large part of the density's gradient.

@@ -170,6 +170,8 @@ TEST(NerfConfig, OutOfRange) {
     expect_bad(R"({"loss": {"smoothness_scale": 0}})", {"'loss.smoothness_scale'"});
     expect_bad(R"({"training": {"batch_samples": 255}})", {"'training.batch_samples'", "[256, 16777216]"});
     expect_bad(R"({"training": {"batch_samples": 16777217}})", {"'training.batch_samples'"});
+    expect_bad(R"({"training": {"subject_rays": 1.5}})", {"'training.subject_rays'", "[0, 1]", "got 1.5"});
+    expect_bad(R"({"training": {"subject_rays": -0.1}})", {"'training.subject_rays'"});
 }
 
 }  // namespace

@@ -54,6 +54,7 @@ struct CudaTrainer::Impl {
     // Training images and cameras.
     DeviceBuffer<uint32_t> images;
     DeviceBuffer<RayCamera> cameras;
+    DeviceBuffer<PixelRect> subject_rects;  // empty: no subject focus
     // Parameters and optimizer state.
     DeviceBuffer<float> params, grads, adam_m, adam_v, ema;
     DeviceBuffer<__half> mlp_half;
@@ -136,6 +137,7 @@ void CudaTrainer::Impl::setup() {
     rc.reserve(data.cameras.size());
     for (const Camera& c : data.cameras) rc.push_back(make_ray_camera(c, model.world_to_model));
     cameras.upload(rc);
+    if (data.subject_rects.size() == data.cameras.size()) subject_rects.upload(data.subject_rects);
 
     // Parameters, optimizer state (fresh or resumed).
     const size_t n = layout.total;
@@ -194,7 +196,12 @@ void CudaTrainer::Impl::run_batch(uint32_t n_rays, uint64_t step_seed) {
     SampleBuffers samples{s_pos.data(), s_dt.data(), s_ray.data(), capacity};
 
     MarchRaysArgs ma;
-    ma.images = {images.data(), cameras.data(), uint32_t(data.cameras.size()), data.width, data.height};
+    ma.images = {images.data(),
+                 cameras.data(),
+                 uint32_t(data.cameras.size()),
+                 data.width,
+                 data.height,
+                 {subject_rects.size() ? subject_rects.data() : nullptr, model.config.training.subject_rays}};
     ma.march = march;
     ma.grid = occupancy->view();
     ma.step_seed = step_seed;

@@ -23,7 +23,8 @@ struct TrainRay {
 __device__ __forceinline__ TrainRay setup_ray(const MarchRaysArgs& a, uint32_t r) {
     const DeviceImages& im = a.images;
     const TrainPixel draw =
-        draw_train_pixel(a.step_seed, r, im.count, im.width, im.height, a.random_background, a.group_spacing);
+        draw_train_pixel(a.step_seed, r, im.count, im.width, im.height, a.random_background, a.group_spacing,
+                         im.focus);
     const int ix = min(int(draw.px), im.width - 1), iy = min(int(draw.py), im.height - 1);
     const uint32_t pix = im.rgba[size_t(draw.image) * im.width * im.height + size_t(iy) * im.width + ix];
     TrainRay t;

@@ -14,6 +14,7 @@
 #include "nerf/occupancy_view.h"
 #include "nerf/pixel_ray.h"
 #include "nerf/ray_march.h"
+#include "nerf/train_pixel.h"
 
 namespace npt::nerf::cuda {
 
@@ -24,6 +25,7 @@ struct DeviceImages {
     const RayCamera* cameras = nullptr;
     uint32_t count = 0;
     int width = 0, height = 0;
+    SubjectFocus focus;  // rects on the device (or null)
 };
 
 // Filled by the kernels of one step; read back once per step.
