@@ -428,6 +428,7 @@ int run_capture(const CaptureArgs& args, const GlobalSettings& global, Interrupt
                                 {"steps", steps},
                                 {"seconds", seconds},
                                 {"downscale", downscale},
+                                {"subject_rays", t.subject_box ? m.config.training.subject_rays : 0.0f},
                                 {"width", rig.width / downscale},
                                 {"height", rig.height / downscale}});
     }

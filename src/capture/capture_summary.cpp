@@ -99,14 +99,18 @@ std::vector<CaptureStageRow> capture_stage_rows(const nlohmann::json& record) {
                                fmt::format("{} training frames, {} held out (every {}th)",
                                            integer(s, "train"), integer(s, "test"), integer(s, "every"))));
     if (const auto t = get("train"); !t.empty())
-        rows.push_back(row("train", "train",
-                           fmt::format("{} steps at {}x{} (downscale {})", value<uint64_t>(t, "steps", 0),
-                                       integer(t, "width"), integer(t, "height"), integer(t, "downscale")),
-                           t));
+        rows.push_back(row(
+            "train", "train",
+            fmt::format("{} steps at {}x{} (downscale {}){}", value<uint64_t>(t, "steps", 0),
+                        integer(t, "width"), integer(t, "height"), integer(t, "downscale"),
+                        num(t, "subject_rays") > 0 ? fmt::format(", {:.0f}% of the rays on the object's box",
+                                                                 100.0 * num(t, "subject_rays"))
+                                                   : std::string()),
+            t));
     if (const auto e = get("eval"); !e.empty())
         rows.push_back(row("eval", "held-out views",
-                           fmt::format("{} frames: PSNR {:.2f} dB, SSIM {:.4f} (eval/)", integer(e, "views"),
-                                       num(e, "psnr"), num(e, "ssim")),
+                           fmt::format("{} frames: PSNR {:.2f} dB, SSIM {:.4f} of the whole frames (eval/)",
+                                       integer(e, "views"), num(e, "psnr"), num(e, "ssim")),
                            e));
     if (const auto i = get("isolate"); !i.empty())
         rows.push_back(
