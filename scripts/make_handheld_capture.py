@@ -7,7 +7,7 @@
 #
 #   blender -b --factory-startup --python scripts/make_handheld_capture.py -- OUT_DIR
 #           [--frames 100] [--width 540] [--height 960] [--fov-y 60] [--samples 4] [--seed 1] [--masks 1]
-#           [--kind vase|bottle|stack]
+#           [--kind vase|bottle|stack] [--only 2,27,52]
 #
 # Writes OUT_DIR/render/frame_NNNNN.png (existing frames are skipped, so an interrupted run resumes) and
 # OUT_DIR/truth.json (transforms.json layout: fl_x/fl_y/cx/cy/w/h and, per frame, the OpenGL camera-to-world
@@ -19,6 +19,8 @@
 # (curate numbers frames from 0 as the video does, so truth.json's names match; scripts/bench_poses.sh does this.)
 # The seed picks the object, the props' places and the shake, so two seeds give two different captures; the
 # object's kind is the seed's first draw (seeds 7, 11, 12, 13 are all bottles) unless --kind names it.
+# --only renders just the listed frame indices: with --samples 256 --masks 0 into another OUT_DIR, clean references
+# of a capture's held-out frames, free of the 4-sample noise (bench/capture_noise_ceiling.py compares them).
 import bpy, sys, os, math, json, random
 from mathutils import Vector, Matrix, Euler
 
@@ -26,7 +28,8 @@ argv = sys.argv[sys.argv.index('--') + 1:] if '--' in sys.argv else []
 if not argv:
     sys.exit('usage: blender -b --factory-startup --python make_handheld_capture.py -- OUT_DIR [--frames N] ...')
 out_dir = os.path.abspath(argv[0])
-opts = {'frames': 100, 'width': 540, 'height': 960, 'fov-y': 60.0, 'samples': 4, 'seed': 1, 'masks': 1, 'kind': ''}
+opts = {'frames': 100, 'width': 540, 'height': 960, 'fov-y': 60.0, 'samples': 4, 'seed': 1, 'masks': 1, 'kind': '',
+        'only': ''}
 i = 1
 while i < len(argv):
     key = argv[i].lstrip('-')
@@ -210,10 +213,18 @@ with open(os.path.join(out_dir, 'truth.json'), 'w') as f:
     json.dump(truth, f, indent=1)
 
 
+only = {int(x) for x in opts['only'].split(',') if x.strip()}
+if any(k < 0 or k >= N for k in only):
+    sys.exit(f'make_handheld_capture: --only names a frame outside 0..{N - 1}: {opts["only"]}')
+
+
 def render_poses(folder, what):
-    """Every pose to OUT_DIR/FOLDER/frame_NNNNN.png; existing files are skipped, so a run resumes."""
+    """Every pose (or those --only names) to OUT_DIR/FOLDER/frame_NNNNN.png; existing files are skipped, so a run
+    resumes."""
     os.makedirs(os.path.join(out_dir, folder), exist_ok=True)
     for k, m in enumerate(poses):
+        if only and k not in only:
+            continue
         path = os.path.join(out_dir, folder, f'frame_{k:05d}.png')
         if os.path.exists(path):
             continue
