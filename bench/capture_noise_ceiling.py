@@ -6,7 +6,12 @@
 #   frame vs clean      the video frame against the clean render: the best PSNR a noise-free model can score
 #   model vs frame      the object model composited over the video frame (eval's "over the photo"), against it
 #   model vs clean      the same model composited over the clean render, against the clean render
-# and, if CAPTURE_DIR/render holds the 4-sample renders before encoding, their PSNR against the clean ones.
+#   object vs clean     inside the mask eroded by 2 px, the model's own colour (its render over white
+#                       unpremultiplied by its alpha) against the clean render: compositing over the frame or
+#                       the clean render fills whatever the model leaves transparent with the truth, which
+#                       flatters a model whose object is partly transparent; this does not
+# and the mean alpha there, and, if CAPTURE_DIR/render holds the 4-sample renders before encoding, their PSNR
+# against the clean ones.
 #   python3 bench/capture_noise_ceiling.py CAPTURE_DIR WORK_DIR CLEAN_DIR EVAL_DIR
 # CAPTURE_DIR: the script's OUT_DIR (masks/, render/); WORK_DIR: `nerfpt capture`'s output (frames/, the decoded
 # video); EVAL_DIR: `nerfpt eval MODEL WORK_DIR --split test -o EVAL_DIR --alpha` (NAME.png over white, NAME_alpha.png).
@@ -47,6 +52,7 @@ if not names:
     sys.exit(f'capture_noise_ceiling: no frame of {eval_dir} has a clean render in {clean_dir}/render')
 raw_dir = os.path.join(capture, 'render')
 cols = ['frame vs clean', 'model vs frame', 'model vs clean']
+inner_kernel = np.ones((5, 5), np.uint8)
 rows = []
 for n in names:
     clean = read(os.path.join(clean_dir, 'render', n))
@@ -60,13 +66,18 @@ for n in names:
     for f in (lambda x: x, shrink):
         m = f(mask.astype(np.float64)) > 0.5
         row += [psnr(f(frame), f(clean), m), psnr(f(over_frame), f(frame), m), psnr(f(over_clean), f(clean), m)]
+    inner = cv2.erode(mask.astype(np.uint8), inner_kernel) > 0
+    own = premultiplied / np.maximum(alpha, 1e-3)
+    row += [psnr(own, clean, inner), float(alpha[..., 0][inner].mean())]
     raw = os.path.join(raw_dir, n)
     row.append(psnr(read(raw), clean, mask) if os.path.exists(raw) else float('nan'))
     rows.append(row)
 
-header = [c + ' (full)' for c in cols] + [c + ' (1/3)' for c in cols] + ['4-spp render vs clean (full)']
+header = [c + ' (full)' for c in cols] + [c + ' (1/3)' for c in cols] + ['object vs clean (full, inside)',
+                                                                         'alpha inside', '4-spp render vs clean (full)']
 print('| frame | ' + ' | '.join(header) + ' |')
 print('|---' * (len(header) + 1) + '|')
 for n, r in zip(names, rows):
-    print(f'| {n} | ' + ' | '.join(f'{x:.2f}' for x in r) + ' |')
-print('| mean | ' + ' | '.join(f'{x:.2f}' for x in np.mean(rows, 0)) + ' |')
+    print(f'| {n} | ' + ' | '.join(f'{x:.4f}' if h == 'alpha inside' else f'{x:.2f}' for h, x in zip(header, r)) + ' |')
+print('| mean | ' + ' | '.join(f'{x:.4f}' if h == 'alpha inside' else f'{x:.2f}'
+                             for h, x in zip(header, np.mean(rows, 0))) + ' |')

@@ -56,7 +56,10 @@ CLI::App* add_eval_command(CLI::App& app, EvalArgs& args) {
         "An isolated object (--object, or a model from `capture`) on photos without alpha also gets psnr\n"
         "in mask over the photo: the render's white background replaced by the photo itself (rgb + (photo -\n"
         "white) x (1 - alpha)), so that the outline's pixels, where the photo mixes the object with the\n"
-        "room, compare the object over the room on both sides rather than over white in the render.\n"
+        "room, compare the object over the room on both sides rather than over white in the render. It also\n"
+        "fills whatever the render leaves transparent inside the mask with the photo, which flatters a "
+        "partly\n"
+        "transparent object: alpha in mask (the mean coverage over the mask's pixels) says how much.\n"
         "Example: nerfpt eval lego.npt ../shared/data/nerf_synthetic/lego --every 8 -o out/lego_eval");
     cmd->add_option("MODEL", args.model, "Model file written by 'nerfpt train' (.npt)")->required();
     cmd->add_option("DATA", args.data,
@@ -234,7 +237,7 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
     Progress progress(ps, std::cerr);
     const uint64_t total_rows = uint64_t(views.size()) * uint64_t(data.height);
     nlohmann::json per_image = nlohmann::json::array();
-    double sum_psnr = 0, sum_ssim = 0, sum_psnr_inside = 0, sum_psnr_over_photo = 0;
+    double sum_psnr = 0, sum_ssim = 0, sum_psnr_inside = 0, sum_psnr_over_photo = 0, sum_alpha_inside = 0;
     size_t views_inside = 0;
     // An isolated object against photos of a whole room: inside the mask, the pixels along its outline mix
     // the object with the room in the photo and with white in the render. The object over the photo itself is
@@ -260,12 +263,14 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
             {{"name", names[k]}, {"frame", i}, {"psnr", p}, {"ssim", s}, {"seconds", seconds}});
         std::string mask_text;
         if (with_masks) {
-            const MaskScores m = score_mask(render_alpha(render), truth_masks[k]);
+            const Coverage alpha = render_alpha(render);
+            const MaskScores m = score_mask(alpha, truth_masks[k]);
             // A view whose mask is empty (the object out of frame) has no inside: null, left out of the mean.
             const bool has_inside =
                 std::find(truth_masks[k].on.begin(), truth_masks[k].on.end(), 1) != truth_masks[k].on.end();
             const double nan = std::numeric_limits<double>::quiet_NaN();
             const double p_in = has_inside ? psnr_inside(render, truth, truth_masks[k]) : nan;
+            const double a_in = has_inside ? mask_coverage_inside(alpha, truth_masks[k]) : nan;
             const double p_photo =
                 has_inside && over_photo
                     ? psnr_inside(nerf::over_plate(render, white, truth), truth, truth_masks[k])
@@ -273,6 +278,7 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
             if (has_inside) {
                 sum_psnr_inside += p_in;
                 sum_psnr_over_photo += over_photo ? p_photo : 0.0;
+                sum_alpha_inside += a_in;
                 ++views_inside;
             }
             mask_sum.iou += m.iou;
@@ -282,12 +288,15 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
             mask_sum.leak += m.leak;
             per_image.back()["mask"] = mask_json(m);
             per_image.back()["mask"]["psnr_inside"] = has_inside ? nlohmann::json(p_in) : nlohmann::json(nullptr);
+            per_image.back()["mask"]["alpha_inside"] =
+                has_inside ? nlohmann::json(a_in) : nlohmann::json(nullptr);
             if (over_photo)
                 per_image.back()["mask"]["psnr_inside_over_photo"] =
                     has_inside ? nlohmann::json(p_photo) : nlohmann::json(nullptr);
             mask_text = fmt::format("  iou {:.4f}  bf {:.4f}  leak {:.3f}%  psnr in mask {}", m.iou, m.boundary.f,
                                     100 * m.leak, has_inside ? fmt::format("{:.2f} dB", p_in) : "n/a (empty mask)");
-            if (over_photo && has_inside) mask_text += fmt::format(" (over the photo {:.2f} dB)", p_photo);
+            if (over_photo && has_inside)
+                mask_text += fmt::format(" (over the photo {:.2f} dB, alpha in mask {:.4f})", p_photo, a_in);
         }
         if (!args.output.empty()) {
             auto no_interrupt = interrupts.hold();  // complete files, or an interrupt waits for them
@@ -313,6 +322,8 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
                                                  : std::numeric_limits<double>::quiet_NaN();
     const double psnr_over_photo_mean =
         views_inside ? sum_psnr_over_photo / double(views_inside) : std::numeric_limits<double>::quiet_NaN();
+    const double alpha_inside_mean =
+        views_inside ? sum_alpha_inside / double(views_inside) : std::numeric_limits<double>::quiet_NaN();
     if (with_masks) {
         mask_mean.iou = mask_sum.iou / n;
         mask_mean.boundary.f = mask_sum.boundary.f / n;
@@ -323,7 +334,8 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
                                 mask_mean.boundary.f, 100 * mask_mean.leak,
                                 views_inside ? fmt::format("{:.2f} dB", psnr_inside_mean) : "n/a (empty masks)");
         if (over_photo && views_inside)
-            mask_text += fmt::format(" (over the photo {:.2f} dB)", psnr_over_photo_mean);
+            mask_text += fmt::format(" (over the photo {:.2f} dB, alpha in mask {:.4f})",
+                                     psnr_over_photo_mean, alpha_inside_mean);
     }
     fmt::print("mean over {} views: psnr {:.2f} dB  ssim {:.4f}{}  ({} in all)\n", views.size(), mean_psnr,
                mean_ssim, mask_text, format_seconds(seconds));
@@ -352,6 +364,8 @@ int run_eval(const EvalArgs& args, const GlobalSettings& global, InterruptGuard&
             metrics["mean"]["mask"] = mask_json(mask_mean);
             metrics["mean"]["mask"]["psnr_inside"] =
                 views_inside ? nlohmann::json(psnr_inside_mean) : nlohmann::json(nullptr);
+            metrics["mean"]["mask"]["alpha_inside"] =
+                views_inside ? nlohmann::json(alpha_inside_mean) : nlohmann::json(nullptr);
             if (over_photo)
                 metrics["mean"]["mask"]["psnr_inside_over_photo"] =
                     views_inside ? nlohmann::json(psnr_over_photo_mean) : nlohmann::json(nullptr);

@@ -170,6 +170,19 @@ double mask_leak(const Coverage& predicted, const Mask& truth, int margin) {
     return count == 0 ? 0.0 : sum / double(count);
 }
 
+double mask_coverage_inside(const Coverage& predicted, const Mask& truth) {
+    check_same_size(predicted, truth, "mask coverage");
+    double sum = 0;
+    size_t count = 0;
+    for (size_t i = 0; i < truth.on.size(); ++i) {
+        if (!truth.on[i]) continue;
+        const float a = predicted.values[i];
+        sum += std::isfinite(a) ? std::clamp(double(a), 0.0, 1.0) : 0.0;
+        ++count;
+    }
+    return count == 0 ? std::numeric_limits<double>::quiet_NaN() : sum / double(count);
+}
+
 MaskScores score_mask(const Coverage& predicted, const Mask& truth) {
     check_same_size(predicted, truth, "mask scores");
     const Mask p = threshold_coverage(predicted);

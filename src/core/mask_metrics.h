@@ -58,6 +58,12 @@ BoundaryScore boundary_f(const Mask& predicted, const Mask& truth, int tolerance
 constexpr int k_leak_margin = 5;
 double mask_leak(const Coverage& predicted, const Mask& truth, int margin = k_leak_margin);
 
+// The mean predicted coverage (clamped to [0, 1]) over the truth's object pixels: how solid the object is
+// where it should be. "psnr in mask over the photo" fills whatever the render leaves transparent with the
+// photo itself, which flatters a partly transparent object; this says how much it filled. NaN when the mask
+// is empty.
+double mask_coverage_inside(const Coverage& predicted, const Mask& truth);
+
 struct MaskScores {
     double iou = 0;
     BoundaryScore boundary;

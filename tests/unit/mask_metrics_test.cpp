@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <string>
 
 #include "core/error.h"
@@ -167,6 +168,20 @@ TEST(MaskMetrics, LeakIsTheMeanCoverageFarFromTheObject) {
     EXPECT_DOUBLE_EQ(s.leak, 1.5 / 244.0);
     EXPECT_GT(s.boundary.f, 0.5);
     EXPECT_LT(s.boundary.f, 1.0);
+}
+
+TEST(MaskMetrics, CoverageInsideIsTheMeanOverTheObjectOnly) {
+    const Mask truth = square(10, 10, 2, 2, 4);         // 16 object pixels
+    Coverage c{10, 10, std::vector<float>(100, 1.0f)};  // covered everywhere: outside does not count
+    const auto px = [&](int x, int y) -> float& { return c.values[size_t(y) * 10 + size_t(x)]; };
+    EXPECT_DOUBLE_EQ(mask_coverage_inside(c, truth), 1.0);
+    px(2, 2) = 0.0f;
+    px(3, 2) = 0.5f;
+    px(4, 2) = 3.0f;                                     // clamped to 1
+    px(5, 2) = std::numeric_limits<float>::quiet_NaN();  // counts as uncovered
+    EXPECT_DOUBLE_EQ(mask_coverage_inside(c, truth), 13.5 / 16.0);
+    EXPECT_TRUE(std::isnan(mask_coverage_inside(c, Mask{10, 10, std::vector<uint8_t>(100, 0)})));
+    EXPECT_THROW(mask_coverage_inside(c, Mask{9, 10, std::vector<uint8_t>(90, 1)}), Error);
 }
 
 TEST(MaskMetrics, ReadsAlphaOrGrey) {
