@@ -56,10 +56,10 @@ CLI::App* add_eval_command(CLI::App& app, EvalArgs& args) {
         "An isolated object (--object, or a model from `capture`) on photos without alpha also gets psnr\n"
         "in mask over the photo: the render's white background replaced by the photo itself (rgb + (photo -\n"
         "white) x (1 - alpha)), so that the outline's pixels, where the photo mixes the object with the\n"
-        "room, compare the object over the room on both sides rather than over white in the render. It also\n"
-        "fills whatever the render leaves transparent inside the mask with the photo, which flatters a "
-        "partly\n"
-        "transparent object: alpha in mask (the mean coverage over the mask's pixels) says how much.\n"
+        "room, compare the object over the room on both sides rather than over white in the render. It\n"
+        "also fills whatever the render leaves transparent inside the mask with the photo, which flatters\n"
+        "a partly transparent object: alpha in mask (the mean coverage over the mask's pixels) says how\n"
+        "much.\n"
         "Example: nerfpt eval lego.npt ../shared/data/nerf_synthetic/lego --every 8 -o out/lego_eval");
     cmd->add_option("MODEL", args.model, "Model file written by 'nerfpt train' (.npt)")->required();
     cmd->add_option("DATA", args.data,
