@@ -76,6 +76,20 @@ void check_mask(const Mask& m, const char* what) {
                     size_text(m.width, m.height));
 }
 
+// The mean predicted coverage, clamped to [0, 1] (NaN as 0), over the pixels where mask.on[i] == on; `empty`
+// when there are none.
+double mean_coverage_where(const Coverage& predicted, const Mask& mask, uint8_t on, double empty) {
+    double sum = 0;
+    size_t count = 0;
+    for (size_t i = 0; i < mask.on.size(); ++i) {
+        if (mask.on[i] != on) continue;
+        const float a = predicted.values[i];
+        sum += std::isfinite(a) ? std::clamp(double(a), 0.0, 1.0) : 0.0;
+        ++count;
+    }
+    return count == 0 ? empty : sum / double(count);
+}
+
 }  // namespace
 
 Mask threshold_coverage(const Coverage& coverage, float threshold) {
@@ -158,29 +172,12 @@ BoundaryScore boundary_f(const Mask& predicted, const Mask& truth, int tolerance
 
 double mask_leak(const Coverage& predicted, const Mask& truth, int margin) {
     check_same_size(predicted, truth, "mask leak");
-    const Mask near = dilate_mask(truth, margin);
-    double sum = 0;
-    size_t count = 0;
-    for (size_t i = 0; i < near.on.size(); ++i) {
-        if (near.on[i]) continue;
-        const float a = predicted.values[i];
-        sum += std::isfinite(a) ? std::clamp(double(a), 0.0, 1.0) : 0.0;
-        ++count;
-    }
-    return count == 0 ? 0.0 : sum / double(count);
+    return mean_coverage_where(predicted, dilate_mask(truth, margin), 0, 0.0);
 }
 
 double mask_coverage_inside(const Coverage& predicted, const Mask& truth) {
     check_same_size(predicted, truth, "mask coverage");
-    double sum = 0;
-    size_t count = 0;
-    for (size_t i = 0; i < truth.on.size(); ++i) {
-        if (!truth.on[i]) continue;
-        const float a = predicted.values[i];
-        sum += std::isfinite(a) ? std::clamp(double(a), 0.0, 1.0) : 0.0;
-        ++count;
-    }
-    return count == 0 ? std::numeric_limits<double>::quiet_NaN() : sum / double(count);
+    return mean_coverage_where(predicted, truth, 1, std::numeric_limits<double>::quiet_NaN());
 }
 
 MaskScores score_mask(const Coverage& predicted, const Mask& truth) {
