@@ -15,6 +15,7 @@
 # (~23 MB) and all of .gpu/relight (~31 MB) do not fit together. Leave out the env.exr files (never read) and
 # dev/test/r_*.png (blank stand-ins are written here: relight_fields needs only the test cameras); then RELIT=1
 # and VARIANTS run in one call. Without RELIT=1, .gpu/relight/dev's relit/, scene/ and lights/ are not read.
+# RELIGHT_DATA: another data set of that layout instead of .gpu/relight/dev (scripts/make_relight_object.py).
 set -uo pipefail
 cd "$(dirname "$0")/.."
 out=${OUT:-/tmp/gpu_out}
@@ -22,7 +23,7 @@ mkdir -p "$out"
 scripts/gpu_check.sh run --gtest_filter='NONE' >/dev/null 2>&1  # unpacks the bundle
 export LD_LIBRARY_PATH=/tmp/nerfpt-gpu/lib
 bin=/tmp/nerfpt-gpu/bin
-data=.gpu/relight/dev
+data=${RELIGHT_DATA:-.gpu/relight/dev}  # another object made as dev was: scripts/make_relight_object.py
 work=/tmp/relight
 rm -rf $work  # a warm machine keeps the last call's renders, which the scorer would read as this call's
 mkdir -p $work/pred
@@ -99,7 +100,7 @@ if [[ -n ${GTEST_FILTER:-} ]]; then
     timeout "${TEST_SECONDS:-300}" scripts/gpu_check.sh run --gtest_filter="$GTEST_FILTER" >"$out/gpu_tests.log" 2>&1
     grep -E "PASSED|FAILED|SKIPPED|Failure|error|relMSE" "$out/gpu_tests.log" | head -40
 fi
-PYTHONPATH=scripts/exr_shim python3 - "$work/pred" "$out" <<'PY'
+PYTHONPATH=scripts/exr_shim python3 - "$work/pred" "$out" "$data" <<'PY'
 # A strip of test views 0, 5, 10: albedo and normal (and relit views where they exist), as one PNG.
 import os, sys
 import cv2, numpy as np
@@ -108,7 +109,7 @@ def read(path):
     inp = oiio.ImageInput.open(path)
     spec = inp.spec(); px = inp.read_image(0, 0, 0, spec.nchannels, 'float'); inp.close()
     return np.asarray(px, np.float32).reshape(spec.height, spec.width, spec.nchannels)
-pred, out = sys.argv[1], sys.argv[2]
+pred, out, data = sys.argv[1], sys.argv[2], sys.argv[3]
 rows = []
 for name, f in (('albedo', 'aov/albedo_%d.exr'), ('normal', 'aov/normal_%d.exr'), ('sunset', 'relit/sunset/r_%d.exr'),
                 ('studio', 'relit/studio/r_%d.exr')):
@@ -125,7 +126,7 @@ if rows: cv2.imwrite(os.path.join(out, 'relight_views.png'), np.concatenate(rows
 # The room: Cycles' reference | nerfpt's render | 4 x |difference|, and the render itself for a closer look.
 room = os.path.join(pred, 'scene', 'render.exr')
 if os.path.exists(room):
-    ref = read(os.path.join(os.environ.get('DATA', '.gpu/relight/dev'), 'scene', 'reference.exr'))[..., :3]
+    ref = read(os.path.join(data, 'scene', 'reference.exr'))[..., :3]
     r = read(room)[..., :3]
     tiles = [ref, r, 4 * np.abs(r - ref)]
     strip = np.concatenate([(np.clip(t, 0, 1) ** (1 / 2.2) * 255).astype(np.uint8)[..., ::-1] for t in tiles], 1)
