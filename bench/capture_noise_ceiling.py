@@ -11,7 +11,9 @@
 #                       the clean render fills whatever the model leaves transparent with the truth, which
 #                       flatters a model whose object is partly transparent; this does not
 # and the mean alpha there, and, if CAPTURE_DIR/render holds the 4-sample renders before encoding, their PSNR
-# against the clean ones.
+# against the clean ones. Last, how sharp the model is: the Gaussian blur (sigma in full-size pixels, of
+# BLUR_SIGMAS) of the clean render that the model over it matches best inside the eroded mask, and the PSNR there
+# (the same search for the video frame says whether the frames are softer than the clean render).
 #   python3 bench/capture_noise_ceiling.py CAPTURE_DIR WORK_DIR CLEAN_DIR EVAL_DIR
 # CAPTURE_DIR: the script's OUT_DIR (masks/, render/); WORK_DIR: `nerfpt capture`'s output (frames/, the decoded
 # video); EVAL_DIR: `nerfpt eval MODEL WORK_DIR --split test -o EVAL_DIR --alpha` (NAME.png over white, NAME_alpha.png).
@@ -53,6 +55,14 @@ if not names:
 raw_dir = os.path.join(capture, 'render')
 cols = ['frame vs clean', 'model vs frame', 'model vs clean']
 inner_kernel = np.ones((5, 5), np.uint8)
+BLUR_SIGMAS = (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
+
+
+def best_blur(image, clean, mask):
+    # (sigma, PSNR) of the blurred clean render closest to image inside mask
+    scores = [(psnr(image, clean if s == 0 else cv2.GaussianBlur(clean, (0, 0), s), mask), s) for s in BLUR_SIGMAS]
+    best = max(scores)
+    return best[1], best[0]
 rows = []
 for n in names:
     clean = read(os.path.join(clean_dir, 'render', n))
@@ -71,10 +81,13 @@ for n in names:
     row += [psnr(own, clean, inner), float(alpha[..., 0][inner].mean())]
     raw = os.path.join(raw_dir, n)
     row.append(psnr(read(raw), clean, mask) if os.path.exists(raw) else float('nan'))
+    row += [*best_blur(over_clean, clean, inner), best_blur(frame, clean, inner)[0]]
     rows.append(row)
 
 header = [c + ' (full)' for c in cols] + [c + ' (1/3)' for c in cols] + ['object vs clean (full, inside)',
-                                                                         'alpha inside', '4-spp render vs clean (full)']
+                                                                         'alpha inside', '4-spp render vs clean (full)',
+                                                                         'model blur sigma (px)', 'model vs blurred clean',
+                                                                         'frame blur sigma (px)']
 print('| frame | ' + ' | '.join(header) + ' |')
 print('|---' * (len(header) + 1) + '|')
 for n, r in zip(names, rows):
