@@ -63,6 +63,8 @@ def best_blur(image, clean, mask):
     scores = [(psnr(image, clean if s == 0 else cv2.GaussianBlur(clean, (0, 0), s), mask), s) for s in BLUR_SIGMAS]
     best = max(scores)
     return best[1], best[0]
+
+
 rows = []
 for n in names:
     clean = read(os.path.join(clean_dir, 'render', n))
