@@ -4,7 +4,7 @@
 #
 #   blender -b --factory-startup --python scripts/make_relight_object.py -- OUTDIR [--object vase] [make_relight args]
 #
-# Objects here: `vase` (a rippled glazed vase, a rounded block, a cell-textured egg and a striped cup on a brick
+# Objects here: `vase` (a rippled glazed vase, a bevelled block, a cell-textured egg and a striped cup on a brick
 # slab). Each has its own camera seed, so no camera repeats dev's. The generator itself is the shared one: this
 # file only adds objects to it.
 import math
@@ -21,6 +21,8 @@ if not os.path.exists(GENERATOR):
 
 SEEDS = {'vase': 20261207}
 argv = sys.argv[sys.argv.index('--') + 1:] if '--' in sys.argv else []
+if argv[-1:] == ['--object']:
+    raise SystemExit('make_relight_object: --object needs a name (have: %s)' % ', '.join(SEEDS))
 variant = argv[argv.index('--object') + 1] if '--object' in argv else 'vase'
 if variant not in SEEDS:
     raise SystemExit('make_relight_object: unknown object %r (have: %s)' % (variant, ', '.join(SEEDS)))
