@@ -58,10 +58,9 @@ inner_kernel = np.ones((5, 5), np.uint8)
 BLUR_SIGMAS = (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
 
 
-def best_blur(image, clean, mask):
-    # (sigma, PSNR) of the blurred clean render closest to image inside mask
-    scores = [(psnr(image, clean if s == 0 else cv2.GaussianBlur(clean, (0, 0), s), mask), s) for s in BLUR_SIGMAS]
-    best = max(scores)
+def best_blur(image, blurred_cleans, mask):
+    # (sigma, PSNR) of the blurred clean render (one per BLUR_SIGMAS) closest to image inside mask
+    best = max((psnr(image, b, mask), s) for b, s in zip(blurred_cleans, BLUR_SIGMAS))
     return best[1], best[0]
 
 
@@ -83,7 +82,8 @@ for n in names:
     row += [psnr(own, clean, inner), float(alpha[..., 0][inner].mean())]
     raw = os.path.join(raw_dir, n)
     row.append(psnr(read(raw), clean, mask) if os.path.exists(raw) else float('nan'))
-    row += [*best_blur(over_clean, clean, inner), best_blur(frame, clean, inner)[0]]
+    blurred = [clean if s == 0 else cv2.GaussianBlur(clean, (0, 0), s) for s in BLUR_SIGMAS]
+    row += [*best_blur(over_clean, blurred, inner), best_blur(frame, blurred, inner)[0]]
     rows.append(row)
 
 header = [c + ' (full)' for c in cols] + [c + ' (1/3)' for c in cols] + ['object vs clean (full, inside)',
